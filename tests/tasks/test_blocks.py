@@ -1,0 +1,197 @@
+"""Scenes, features and labels of the block world."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sann.tasks.blocks import (
+    FEATURE_NAMES,
+    MODES,
+    TABLE_SIZE,
+    BlockWorldParams,
+    _pair_free,
+    features,
+    generate_scene,
+    graspable,
+    neighbours,
+    observe_scene,
+    rests_on_matrix,
+    scene_from_blocks,
+)
+
+N_RANDOM = 150
+
+
+def _overlaps(scene) -> bool:
+    lo, hi = scene.lo(), scene.hi()
+    ov = np.minimum(hi[:, None], hi[None]) - np.maximum(lo[:, None], lo[None])
+    hit = (ov > 1e-6).all(axis=2)
+    np.fill_diagonal(hit, False)
+    return bool(hit.any())
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_generator_invariants(mode: str) -> None:
+    for seed in range(N_RANDOM):
+        n = 1 + seed % 26
+        scene = generate_scene(mode, n, seed)
+        assert scene.n == n and len(set(scene.ids.tolist())) == n
+        assert set(scene.size.tolist()) <= {5.0, 10.0}
+        assert set(scene.color.tolist()) <= {1, 2, 3, 4}
+        assert not _overlaps(scene), f"{mode} seed {seed}: blocks overlap"
+        lo, hi = scene.lo(), scene.hi()
+        assert (lo[:, :2] >= -1e-6).all() and (hi[:, :2] <= TABLE_SIZE + 1e-6).all()
+        # every block rests on the table or on its support, centre over the support's top
+        for i, sup in enumerate(scene.support):
+            if sup < 0:
+                assert lo[i, 2] == pytest.approx(0.0)
+            else:
+                assert lo[i, 2] == pytest.approx(hi[sup, 2])
+                assert (np.abs(scene.centre[i, :2] - scene.centre[sup, :2])
+                        <= scene.size[sup] / 2 + 1e-9).all()
+
+
+def test_c1_nothing_stacked() -> None:
+    for seed in range(N_RANDOM):
+        scene = generate_scene("C1", 1 + seed % 26, seed)
+        assert (scene.support == -1).all()
+        assert np.allclose(scene.centre[:, 2], scene.size / 2)
+
+
+def test_c1_has_touching_blocks() -> None:
+    touching = sum(
+        (neighbours(s, s.centre)[:, :4] > 0).any()
+        for s in (generate_scene("C1", 20, seed) for seed in range(20))
+    )
+    assert touching >= 15
+
+
+def test_c2_single_column_exactly_one_graspable() -> None:
+    for seed in range(N_RANDOM):
+        n = 1 + seed % 26
+        scene = generate_scene("C2", n, seed)
+        assert (scene.support == -1).sum() == 1
+        labels = graspable(scene)
+        assert labels.sum() == 1
+        top = int(np.argmax(scene.centre[:, 2]))
+        assert labels[top]
+
+
+def test_c3_has_stacks_and_side_blockage() -> None:
+    stacked = side = 0
+    for seed in range(40):
+        scene = generate_scene("C3", 16, seed)
+        stacked += (scene.support >= 0).any()
+        labels = graspable(scene)
+        clear = ~rests_on_matrix(scene).any(axis=1)
+        side += (clear & ~labels).any()  # clear but blocked from the sides
+    assert stacked == 40
+    assert side >= 20
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_seeds_reproduce(mode: str) -> None:
+    a, b = generate_scene(mode, 17, 123), generate_scene(mode, 17, 123)
+    c = generate_scene(mode, 17, 124)
+    assert np.array_equal(a.centre, b.centre) and np.array_equal(a.ids, b.ids)
+    assert not np.array_equal(a.centre, c.centre)
+    fa, fb = observe_scene(a, 5).features, observe_scene(b, 5).features
+    assert np.array_equal(fa, fb)
+
+
+def test_bad_parameters() -> None:
+    with pytest.raises(ValueError, match="1..26"):
+        generate_scene("C1", 27, 0)
+    with pytest.raises(ValueError, match="1..26"):
+        generate_scene("C1", 0, 0)
+    with pytest.raises(ValueError, match="C1, C2, C3"):
+        generate_scene("C4", 5, 0)
+    with pytest.raises(ValueError, match="sensor_noise"):
+        BlockWorldParams(sensor_noise=-0.1)
+    with pytest.raises(ValueError, match="min_blocks"):
+        BlockWorldParams(min_blocks=10, max_blocks=5)
+    with pytest.raises(ValueError, match="Generator"):
+        generate_scene("C1", 3, "seed")
+
+
+# --------------------------------------------------------------- hand-built scenes
+
+# A row along x on the table: A | B C (B and C touch, A is 5 units away from B),
+# D on top of C, E alone at the back.
+ROW = [
+    ("A", 10, (20, 50, 5), 1),
+    ("B", 10, (35, 50, 5), 2),
+    ("C", 10, (45, 50, 5), 3),
+    ("D", 5, (46, 51, 12.5), 4),
+    ("E", 5, (120, 125, 2.5), 1),
+]
+
+
+def test_labels_hand_built() -> None:
+    scene = scene_from_blocks(ROW)
+    labels = dict(zip(scene.names, graspable(scene).tolist(), strict=True))
+    # A: free along x (5-unit gap >= finger width 2); B: touches C along x, but y is free;
+    # C: D rests on it; D: on top, free all round; E: alone.
+    assert labels == {"A": True, "B": True, "C": False, "D": True, "E": True}
+    assert scene.support.tolist() == [-1, -1, -1, 2, -1]
+
+
+def test_labels_side_pairs() -> None:
+    # X is boxed in along x (L and R touch it); along y, F is 2 units away, B 1 unit.
+    box = [
+        ("X", 10, (50, 50, 5)), ("L", 10, (40, 50, 5)), ("R", 10, (60, 50, 5)),
+        ("F", 10, (50, 38, 5)), ("B", 10, (50, 61, 5)),
+    ]
+    assert not graspable(scene_from_blocks(box))[scene_from_blocks(box).slot("X")]
+    # move B 2 units away (exactly the finger width): the y pair is free
+    box[-1] = ("B", 10, (50, 62, 5))
+    scene = scene_from_blocks(box)
+    assert graspable(scene)[scene.slot("X")]
+    # narrower fingers fit through the 1-unit gap
+    box[-1] = ("B", 10, (50, 61.5, 5))
+    scene = scene_from_blocks(box)
+    assert not graspable(scene)[scene.slot("X")]
+    assert graspable(scene, BlockWorldParams(gripper_finger_width=1.0))[scene.slot("X")]
+
+
+def test_label_overhang_blocks_fingers() -> None:
+    # a 10-block centred on a 5-block overhangs the 5-block's sides: the 5-block is covered,
+    # and a 5-block standing beside the column under the overhang cannot be gripped along x
+    scene = scene_from_blocks([
+        ("A", 5, (50, 50, 2.5)), ("B", 10, (50, 50, 10)), ("C", 5, (42, 50, 2.5)),
+    ])
+    labels = dict(zip(scene.names, graspable(scene).tolist(), strict=True))
+    assert labels == {"A": False, "B": True, "C": True}  # C: its y pair is free
+    assert not _pair_free(scene, 0, 2.0)[scene.slot("C")]  # B's overhang is over C's x slab
+    walled = scene_from_blocks([
+        ("A", 5, (50, 50, 2.5)), ("B", 10, (50, 50, 10)), ("C", 5, (42, 50, 2.5)),
+        ("D", 5, (42, 55, 2.5)),
+    ])
+    assert not graspable(walled)[walled.slot("C")]
+
+
+def test_features_hand_built() -> None:
+    scene = scene_from_blocks(ROW)
+    f = features(scene)  # true positions
+    assert f.shape == (5, 13) and len(FEATURE_NAMES) == 13
+    row = {name: dict(zip(FEATURE_NAMES, f[i].tolist(), strict=True))
+           for i, name in enumerate(scene.names)}
+    assert row["A"]["X"] == 20 and row["A"]["Z"] == 5 and row["A"]["Target"] == 1
+    assert row["A"]["Distance"] == pytest.approx(np.hypot(np.hypot(45, 50), 5))
+    assert row["E"]["Distance"] == 130  # clipped
+    assert row["A"]["Right"] == 0  # 5 units away: beyond the neighbour gap
+    assert row["B"]["Right"] == 3 and row["C"]["Left"] == 2
+    assert row["C"]["Up"] == 4 and row["D"]["Down"] == 3 and row["D"]["Up"] == 0
+    assert row["D"]["Left"] == 0  # D sits above B's top: no z overlap
+    assert row["C"]["Color"] == 3 and row["D"]["Size"] == 5
+
+
+def test_features_noise_is_small_and_seeded() -> None:
+    scene = scene_from_blocks(ROW)
+    o1, o2 = observe_scene(scene, 1), observe_scene(scene, 1)
+    assert np.array_equal(o1.features, o2.features)
+    assert np.abs(o1.features[:, :3] - scene.centre).max() < 2.0
+    assert np.array_equal(o1.features[:, 7:], features(scene)[:, 7:])  # relations survive
+    exact = observe_scene(scene, 1, BlockWorldParams(sensor_noise=0.0))
+    assert np.array_equal(exact.features, features(scene))
