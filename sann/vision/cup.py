@@ -46,6 +46,9 @@ def profile_normals() -> np.ndarray:
     return n / np.linalg.norm(n, axis=1, keepdims=True)
 
 
+_PROFILE_NORMALS = profile_normals()
+
+
 def lid_segments() -> np.ndarray:
     """Boolean per profile segment: True for the lid."""
     return CUP_PROFILE[:-1, 1] >= LID_START_Z
@@ -111,9 +114,10 @@ def cup_local_normals(points: np.ndarray, segment: np.ndarray) -> np.ndarray:
     point; using it instead of the faceted normal removes the 48 intensity steps around the
     cup, which would otherwise show up as spurious colour gradients for LineMod.
     """
-    n_rz = profile_normals()[segment]
-    phi = np.arctan2(points[..., 1], points[..., 0])
-    return np.stack([n_rz[..., 0] * np.cos(phi), n_rz[..., 0] * np.sin(phi), n_rz[..., 1]], -1)
+    n_rz = _PROFILE_NORMALS[segment].astype(points.dtype)
+    r = np.hypot(points[..., 0], points[..., 1])
+    scale = n_rz[..., 0] / np.maximum(r, 1e-9)  # on the axis only flat faces exist (n_r = 0)
+    return np.stack([points[..., 0] * scale, points[..., 1] * scale, n_rz[..., 1]], -1)
 
 
 def _segment_distance(points_rz: np.ndarray) -> np.ndarray:

@@ -9,10 +9,13 @@ the cup lit in the same way.  Colours are RGB (OpenCV wants BGR: ``rgb[..., ::-1
 
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import TYPE_CHECKING
 
+import cv2
 import numpy as np
 from embreex import rtcore_scene
 from embreex.mesh_construction import TriangleMesh
@@ -33,6 +36,8 @@ TABLE_RGB = np.array([118.0, 118.0, 124.0])
 #: Directional light in the camera frame (towards the light): from above-left of the sensor.
 LIGHT_DIR = np.array([-0.3, -0.5, -1.0]) / np.linalg.norm([-0.3, -0.5, -1.0])
 AMBIENT = 0.3
+#: Threads for ray casting (the machine has 2 cores; results do not depend on it).
+TRACE_THREADS = max(1, min(2, os.cpu_count() or 1))
 
 
 @dataclass(frozen=True)
@@ -66,6 +71,7 @@ def _cup_arrays(segments: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.n
     """Cup vertices, faces, per-face profile segment and per-face albedo."""
     mesh = cup_mesh(segments)
     albedo = np.where(face_is_lid(segments)[:, None], CUP_LID_RGB, CUP_BODY_RGB)
+    albedo = albedo.astype(np.float32)
     return (np.asarray(mesh.vertices), np.asarray(mesh.faces, dtype=np.int32),
             mesh.metadata["segment"], albedo)
 
@@ -106,7 +112,7 @@ class _Scene:
 
     def shade(self, rays: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Trace the rays; depth (mm, 0 = miss), rgb (float) and instance per ray."""
-        hit = self.scene.run(np.zeros_like(rays), rays, output=1)
+        hit = _trace(self.scene, rays)
         prim = hit["primID"]
         depth = np.where(prim >= 0, hit["tfar"], np.float32(0.0))
         rgb = np.zeros((len(rays), 3), dtype=np.float32)
@@ -124,12 +130,33 @@ class _Scene:
 
     def _shade_cups(self, points: np.ndarray, idx: np.ndarray, face: np.ndarray) -> np.ndarray:
         """Lambertian colour at camera-frame cup surface points (exact smooth normals)."""
-        r, t = self.poses[idx, :3, :3], self.poses[idx, :3, 3]
-        local = np.einsum("nij,ni->nj", r, points - t)
-        normal = np.einsum("nij,nj->ni", r, cup_local_normals(local, self.segment[face]))
+        lambert = np.empty(len(points), dtype=np.float32)
+        order = np.argsort(idx, kind="stable")
+        bounds = np.searchsorted(idx[order], np.arange(self.n_cups + 1))
+        for k in range(self.n_cups):
+            sel = order[bounds[k]:bounds[k + 1]]
+            if sel.size == 0:
+                continue
+            r = self.poses[k, :3, :3].astype(np.float32)
+            t = self.poses[k, :3, 3].astype(np.float32)
+            local = (points[sel] - t) @ r
+            light_local = r.T @ LIGHT_DIR.astype(np.float32)  # light in the cup's frame
+            lambert[sel] = cup_local_normals(local, self.segment[face[sel]]) @ light_local
         # The inside of the cup is never seen (the lid closes it), so normals face the viewer.
-        lambert = np.clip(normal @ LIGHT_DIR, 0.0, 1.0)
+        np.clip(lambert, 0.0, 1.0, out=lambert)
         return self.cup_albedo[face] * (AMBIENT + (1.0 - AMBIENT) * lambert)[:, None]
+
+
+_POOL = ThreadPoolExecutor(max_workers=TRACE_THREADS)
+
+
+def _trace(scene: rtcore_scene.EmbreeScene, rays: np.ndarray) -> dict[str, np.ndarray]:
+    """Intersect camera-frame rays from the origin; in chunks on threads (embree drops the GIL)."""
+    if len(rays) < 4096 or TRACE_THREADS == 1:
+        return scene.run(np.zeros_like(rays), rays, output=1)
+    chunks = np.array_split(rays, TRACE_THREADS)
+    parts = list(_POOL.map(lambda r: scene.run(np.zeros_like(r), r, output=1), chunks))
+    return {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
 
 
 def _flat_shading(vertices: np.ndarray, faces: np.ndarray, albedo: np.ndarray) -> np.ndarray:
@@ -186,12 +213,14 @@ def render(
     box: Box | None = None,
     table: bool = True,
     segments: int = CUP_SEGMENTS,
+    exhaustive: bool = False,
 ) -> RenderResult:
     """Render cups (a ``Pile``, or world poses of shape (N, 4, 4)) with the box and the table.
 
     A ``Pile`` brings its own box; for bare poses pass ``box`` (or None for no box).  The empty
     scene is rendered once per camera and box; afterwards only the pixels inside the cups'
-    projected bounding rectangles are traced (against cups, box and table, so walls occlude).
+    projected outlines are traced (against cups, box and table, so walls occlude).
+    ``exhaustive=True`` traces every pixel instead: the slow reference for the fast path.
     """
     poses = getattr(scene, "poses", scene)
     box = getattr(scene, "box", box)
@@ -200,6 +229,8 @@ def render(
     depth, rgb = bg_depth.copy(), bg_rgb.copy()
     instance = np.full(camera.width * camera.height, BACKGROUND, dtype=np.int16)
     pixels = _cup_pixels(cam_poses, camera, segments)
+    if exhaustive:
+        pixels = np.arange(camera.width * camera.height)
     if pixels.size:
         sc = _Scene(cam_poses, _background_in_camera(box, camera, table), segments)
         depth[pixels], rgb[pixels], instance[pixels] = sc.shade(_camera_rays(camera)[pixels])
@@ -236,16 +267,22 @@ def render_cup(
 
 
 def _cup_pixels(cam_poses: np.ndarray, camera: Camera, segments: int) -> np.ndarray:
-    """Flat indices of the pixels inside the cups' projected bounding rectangles."""
-    inside = np.zeros((camera.height, camera.width), dtype=bool)
+    """Flat indices of the pixels that may see a cup: the convex hulls of the cups' projected
+    vertices (the faceted cup lies inside them), grown by a pixel for rounding."""
+    inside = np.zeros((camera.height, camera.width), dtype=np.uint8)
     verts = _cup_arrays(segments)[0]
     for pose in cam_poses:
         p = transform_points(pose, verts)
         if np.any(p[:, 2] <= 1.0):
             raise ValueError("every cup must lie entirely in front of the camera")
         uv, _ = camera.project(p, frame="camera")
-        u0, v0 = np.maximum(np.floor(uv.min(axis=0)).astype(int) - 1, 0)
-        u1 = min(int(np.ceil(uv[:, 0].max())) + 2, camera.width)
-        v1 = min(int(np.ceil(uv[:, 1].max())) + 2, camera.height)
-        inside[v0:v1, u0:u1] = True
+        lo, hi = uv.min(axis=0), uv.max(axis=0)
+        if hi[0] < -2 or hi[1] < -2 or lo[0] > camera.width + 2 or lo[1] > camera.height + 2:
+            continue
+        hull = cv2.convexHull(np.round(uv * 16).astype(np.int32))
+        cv2.fillConvexPoly(inside, hull, 1, lineType=cv2.LINE_8, shift=4)
+    inside = cv2.dilate(inside, _KERNEL)
     return np.flatnonzero(inside)
+
+
+_KERNEL = np.ones((3, 3), dtype=np.uint8)
