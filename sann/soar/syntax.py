@@ -1,0 +1,723 @@
+"""Parse Soar 9.6 rule files into the dataclasses of `sann.soar.production`.
+
+The grammar lives in ``grammars/soar.lark`` (LALR(1), contextual lexer). This module holds
+what a grammar cannot say:
+
+- a post-lexer that makes newlines white space inside braces (commands end at a newline,
+  productions span lines);
+- a transformer, one small method per grammar rule, that normalises Soar's surface syntax
+  exactly as the kernel does: ``^a.b.c`` paths become chains through fresh variables named
+  like the kernel's (``<a*1>``, ``<b*1>``: the first letter of the attribute and a counter per
+  letter that skips names the production already uses), a missing value or identifier test
+  becomes a fresh variable, ``^a v1 v2`` one condition per value, ``-( ... )`` of several
+  conditions a conjunctive negation, several preferences on one value several actions;
+- the checks the kernel makes when it loads a production: ``(state <s>)`` with no attribute
+  test, RHS actions whose identifier is not grounded, unknown RHS functions, binary
+  preferences on a non-operator attribute — plus our own refusal of ``exec`` and ``cmd``;
+- the translation of Lark's exceptions into `SoarSyntaxError` with file, line, column,
+  the source line and the expected tokens in words. No Lark exception escapes `parse`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from collections.abc import Collection, Iterator
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+from lark import Lark, Token, Transformer, v_args
+from lark.exceptions import (
+    LarkError,
+    UnexpectedCharacters,
+    UnexpectedEOF,
+    UnexpectedInput,
+    UnexpectedToken,
+    VisitError,
+)
+
+from sann.soar.errors import SoarSemanticError, SoarSyntaxError
+from sann.soar.production import (
+    Action,
+    CallAction,
+    Command,
+    Condition,
+    ConditionElement,
+    Conjunction,
+    ConjunctiveNegation,
+    Const,
+    Disjunction,
+    FuncCall,
+    MakeAction,
+    Production,
+    Relational,
+    RhsValue,
+    SourceLocation,
+    Test,
+    Var,
+)
+
+__all__ = [
+    "GRAMMAR_PATH",
+    "KNOWN_RHS_FUNCTIONS",
+    "REFUSED_RHS_FUNCTIONS",
+    "parse",
+    "parse_file",
+    "parse_production",
+]
+
+GRAMMAR_PATH = Path(__file__).resolve().parents[2] / "grammars" / "soar.lark"
+
+#: The right-hand-side functions a production may call (the agent's rhs.py implements them).
+KNOWN_RHS_FUNCTIONS: frozenset[str] = frozenset(
+    {
+        "write", "crlf", "halt", "interrupt",
+        "+", "-", "*", "/", "div", "mod", "abs", "int", "float",
+        "concat", "make-constant-symbol", "timestamp",
+    }
+)  # fmt: skip
+
+#: Functions that would run shell commands or interpreter code: never allowed in a rule file.
+REFUSED_RHS_FUNCTIONS: frozenset[str] = frozenset({"exec", "cmd"})
+
+_REFUSAL = "a rule file never runs shell commands or Python"
+
+# Placeholder variables are created with a name no user variable can have (NUL is not a
+# constituent character) and renamed to the kernel's `<a*1>` names once the whole production
+# is known, so that the fresh names skip every name the production already uses.
+_PLACEHOLDER = "\0"
+_IDENTIFIER = re.compile(r"[A-Za-z]\d+")
+
+
+# ------------------------------------------------------------------------------- the parser
+
+
+class _BraceNewlines:
+    """Post-lexer: a newline ends a command only outside braces."""
+
+    always_accept = ("_NL",)
+
+    def process(self, stream: Iterator[Token]) -> Iterator[Token]:
+        depth = 0
+        for token in stream:
+            if token.type == "LBRACE":
+                depth += 1
+            elif token.type == "RBRACE":
+                depth = max(0, depth - 1)
+            elif token.type == "_NL" and depth:
+                continue
+            yield token
+
+
+@lru_cache(maxsize=1)
+def _parser() -> Lark:
+    """Build the LALR parser once per process (about 0.1 s); parsing then costs little."""
+    return Lark(
+        GRAMMAR_PATH.read_text(encoding="utf-8"),
+        parser="lalr",
+        lexer="contextual",
+        postlex=_BraceNewlines(),
+        propagate_positions=True,
+        maybe_placeholders=False,
+    )
+
+
+# ----------------------------------------------------------------- intermediate structures
+
+
+@dataclass(frozen=True)
+class _Goal:
+    keyword: str
+
+
+@dataclass(frozen=True)
+class _AttrValueTests:
+    """One ``-^a.b v1 v2 +`` inside a parenthesised condition, before normalisation."""
+
+    negated: bool
+    path: tuple[Test, ...]
+    values: tuple[tuple[Test, bool], ...]
+
+
+@dataclass(frozen=True)
+class _Preference:
+    op: str
+    token: Token
+
+
+@dataclass(frozen=True)
+class _AttrValueMake:
+    """One ``^a.b v1 > v2 v3 -`` of an action: the path and each value's preferences."""
+
+    path: tuple[RhsValue, ...]
+    values: tuple[tuple[RhsValue, tuple[tuple[str, RhsValue | None], ...]], ...]
+
+
+# ----------------------------------------------------------------------- the transformer
+
+
+def _first_letter(value: object) -> str:
+    """The letter Soar names a fresh variable after (``^block.top`` gives ``<b*1>``)."""
+    if isinstance(value, Var):
+        letter = value.name[:1]
+        return letter if letter.isalnum() else "v"
+    if isinstance(value, Const):
+        if isinstance(value.value, bool) or not isinstance(value.value, str):
+            return "i" if isinstance(value.value, int) else "f"
+        letter = value.value[:1].lower()
+        return letter if letter.isalpha() else "v"
+    if isinstance(value, Conjunction):
+        for test in value.tests:
+            if isinstance(test, Var | Const):
+                return _first_letter(test)
+    return "v"
+
+
+def _unescape(body: str) -> str:
+    return re.sub(r"\\(.)", r"\1", body, flags=re.S)
+
+
+class _ToDataclasses(Transformer):
+    """Lark tree -> production dataclasses, one small method per grammar rule."""
+
+    def __init__(self, text: str, file: str, functions: Collection[str]) -> None:
+        super().__init__()
+        self.text = text
+        self.file = file
+        self.functions = functions
+        self._fresh = 0
+
+    # -- helpers
+
+    def _placeholder(self, letter: str) -> Var:
+        self._fresh += 1
+        return Var(f"{_PLACEHOLDER}{self._fresh:08d}{letter}")
+
+    def _syntax_error(self, message: str, line: int, column: int) -> SoarSyntaxError:
+        return _syntax_error(self.text, self.file, message, line, column)
+
+    def _location(self, token: Token) -> SourceLocation:
+        return SourceLocation(self.file, token.line or 1, token.column or 1)
+
+    # -- file and commands
+
+    def start(self, items: list) -> list:
+        return list(items)
+
+    def command(self, items: list) -> Command:
+        name, *args = items
+        return Command(str(name), tuple(args), self._location(name))
+
+    def shell_command(self, items: list) -> None:
+        name = items[0]
+        raise self._syntax_error(f"'{name}' is refused: {_REFUSAL}", name.line, name.column)
+
+    @v_args(meta=True)
+    def braced(self, meta: Any, items: list) -> str:
+        return self.text[meta.start_pos : meta.end_pos]
+
+    def WORD(self, token: Token) -> str:  # noqa: N802 - Lark names terminal callbacks so
+        return str(token)
+
+    def DQSTRING(self, token: Token) -> str:  # noqa: N802
+        return _unescape(token[1:-1])
+
+    # -- constants and tests
+
+    def variable(self, items: list) -> Var:
+        return Var(items[0][1:-1])
+
+    def symbol(self, items: list) -> Const:
+        return Const(str(items[0]))
+
+    def idlike(self, items: list) -> Const:
+        return Const(str(items[0]).upper())
+
+    def qstring(self, items: list) -> Const:
+        return Const(_unescape(items[0][1:-1]))
+
+    def integer(self, items: list) -> Const:
+        return Const(int(items[0]))
+
+    def float(self, items: list) -> Const:
+        return Const(float(_float_text(items[0])))
+
+    def relation(self, items: list) -> str:
+        return str(items[0])
+
+    def relational_test(self, items: list) -> Test:
+        op, operand = items
+        return operand if op == "=" else Relational(op, operand)
+
+    def disjunction_test(self, items: list) -> Disjunction:
+        return Disjunction(tuple(items[1:-1]))
+
+    def conjunctive_test(self, items: list) -> Test:
+        return items[0] if len(items) == 1 else Conjunction(tuple(items))
+
+    # -- conditions
+
+    def goal(self, items: list) -> _Goal:
+        return _Goal(str(items[0]))
+
+    def attr_path(self, items: list) -> tuple[Test, ...]:
+        return tuple(items)
+
+    def value_test(self, items: list) -> tuple[Test, bool]:
+        return items[0], len(items) == 2
+
+    def attr_value_tests(self, items: list) -> _AttrValueTests:
+        negated = isinstance(items[0], Token) and items[0].type == "MINUS"
+        path, *values = items[1:] if negated else items
+        return _AttrValueTests(negated, path, tuple(values))
+
+    @v_args(meta=True)
+    def conds_for_one_id(self, meta: Any, items: list) -> list[ConditionElement]:
+        goal = items.pop(0).keyword if items and isinstance(items[0], _Goal) else None
+        has_id = bool(items) and not isinstance(items[0], _AttrValueTests)
+        id_test = items.pop(0) if has_id else self._placeholder("i" if goal == "impasse" else "s")
+        if goal and not items:
+            raise self._syntax_error(
+                f"expected an attribute test after '({goal}': add one such as "
+                "'^type state' or '^superstate nil'",
+                meta.end_line,
+                meta.end_column - 1,
+            )
+        elements: list[ConditionElement] = []
+        for avt in items:
+            elements.extend(self._expand_tests(id_test, goal, avt))
+        return elements
+
+    def _expand_tests(
+        self, id_test: Test, goal: str | None, avt: _AttrValueTests
+    ) -> list[ConditionElement]:
+        """One attribute test with its path and values -> conditions (kernel order)."""
+        chain: list[Condition] = []
+        ident: Test = id_test
+        for step in avt.path[:-1]:
+            link = self._placeholder(_first_letter(step))
+            chain.append(Condition(ident, step, link, goal=goal if ident is id_test else None))
+            ident = link
+        attr = avt.path[-1]
+        values = avt.values or ((self._placeholder(_first_letter(attr)), False),)
+        step_goal = goal if ident is id_test else None
+        last = [Condition(ident, attr, v, acceptable=plus, goal=step_goal) for v, plus in values]
+        if not avt.negated:
+            return [*chain, *last]
+        if chain:
+            return [ConjunctiveNegation((*chain, *last))]
+        return [dataclasses.replace(c, negated=True) for c in last]
+
+    def condition(self, items: list) -> list[ConditionElement]:
+        return items[0]
+
+    def condition_group(self, items: list) -> list[ConditionElement]:
+        return [element for group in items for element in group]
+
+    def negated_condition(self, items: list) -> list[ConditionElement]:
+        return _negate(items[1])
+
+    # -- actions
+
+    def preference(self, items: list) -> _Preference:
+        return _Preference(str(items[0]), items[0])
+
+    def value_item(self, items: list) -> object:
+        return items[0]
+
+    def rhs_path(self, items: list) -> tuple[RhsValue, ...]:
+        return tuple(items)
+
+    def attr_value_make(self, items: list) -> _AttrValueMake:
+        path, *rest = items
+        return _AttrValueMake(path, tuple(self._resolve_preferences(rest)))
+
+    def _resolve_preferences(
+        self, items: list
+    ) -> Iterator[tuple[RhsValue, tuple[tuple[str, RhsValue | None], ...]]]:
+        """Soar's rule: a binary sign (``> < =``) takes the next value as its referent unless
+        a comma, ``^`` or ``)`` follows it; ``+ - ! ~ @`` are always unary."""
+        i = 0
+        while i < len(items):
+            value = items[i]
+            if isinstance(value, Token | _Preference):
+                raise self._item_error(value, "a value before the preference")
+            i += 1
+            prefs: list[tuple[str, RhsValue | None]] = []
+            while i < len(items) and isinstance(items[i], _Preference):
+                pref = items[i]
+                following = items[i + 1] if i + 1 < len(items) else None
+                if pref.op in "><=" and following is not None and _is_value(following):
+                    prefs.append((pref.op, following))
+                    i += 2
+                elif pref.op in "><=" and isinstance(following, _Preference):
+                    raise self._item_error(following, f"a value or ',' after '{pref.op}'")
+                else:
+                    prefs.append((pref.op, None))
+                    i += 1
+                if i < len(items) and _is_comma(items[i]):
+                    i += 1
+            if i < len(items) and _is_comma(items[i]):
+                raise self._item_error(items[i], "a preference before ','")
+            yield value, tuple(prefs) or (("+", None),)
+
+    def _item_error(self, item: object, expected: str) -> SoarSyntaxError:
+        token = item.token if isinstance(item, _Preference) else item
+        return self._syntax_error(
+            f"unexpected '{token}' in an action: expected {expected}", token.line, token.column
+        )
+
+    def make_action(self, items: list) -> list[Action]:
+        ident, *makes = items
+        actions: list[Action] = []
+        for make in makes:
+            actions.extend(self._expand_make(ident, make))
+        return actions
+
+    def _expand_make(self, ident: Var, make: _AttrValueMake) -> list[Action]:
+        actions: list[Action] = []
+        for step in make.path[:-1]:
+            link = self._placeholder(_first_letter(step))
+            actions.append(MakeAction(ident, step, link))
+            ident = link
+        for value, prefs in make.values:
+            for op, referent in prefs:
+                actions.append(MakeAction(ident, make.path[-1], value, op, referent))
+        return actions
+
+    def function_name(self, items: list) -> str:
+        token = items[0]
+        return str(token).upper() if token.type == "IDLIKE" else str(token)
+
+    def function_call(self, items: list) -> FuncCall:
+        return FuncCall(items[0], tuple(items[1:]))
+
+    def call_action(self, items: list) -> list[Action]:
+        return [CallAction(items[0])]
+
+    # -- productions
+
+    def production_name(self, items: list) -> Token:
+        token = items[0]
+        if _IDENTIFIER.fullmatch(token):
+            raise self._syntax_error(
+                f"production name '{token}' looks like an identifier (a letter and digits); "
+                "Soar refuses it: choose another name",
+                token.line,
+                token.column,
+            )
+        return token
+
+    def doc(self, items: list) -> tuple[str]:
+        return (items[0],)  # already unescaped by DQSTRING
+
+    def flag(self, items: list) -> str:
+        return str(items[0])[1:]
+
+    def production(self, items: list) -> Production:
+        sp, name_token, *rest = items
+        name = str(name_token)
+        if name_token.type == "QSTRING":
+            name = _unescape(name[1:-1])
+        doc = rest.pop(0)[0] if rest and isinstance(rest[0], tuple) else None
+        flags = []
+        while rest and isinstance(rest[0], str):
+            flags.append(rest.pop(0))
+        arrow = next(i for i, item in enumerate(rest) if isinstance(item, Token))
+        conditions = [c for group in rest[:arrow] for c in group]
+        actions = [a for group in rest[arrow + 1 :] for a in group]
+        production = Production(
+            name, tuple(conditions), tuple(actions), doc, tuple(flags), self._location(sp)
+        )
+        production = _name_placeholders(production)
+        _check_production(production, self.functions)
+        return production
+
+
+# --------------------------------------------------------------------- normalisation helpers
+
+
+def _float_text(text: str) -> str:
+    """Soar accepts ``1.5e`` and ``2.e+``: an exponent without digits counts as none."""
+    return re.sub(r"[eE][+-]?$", "", text)
+
+
+def _is_value(item: object) -> bool:
+    return not isinstance(item, Token | _Preference)
+
+
+def _is_comma(item: object) -> bool:
+    return isinstance(item, Token) and item.type == "COMMA"
+
+
+def _negate(elements: list[ConditionElement]) -> list[ConditionElement]:
+    """``-`` before a condition or group, as the kernel does it: one condition flips its
+    sign (``-(<s> -^a b)`` is positive); several become a conjunctive negation."""
+    if len(elements) == 1 and isinstance(elements[0], Condition):
+        only = elements[0]
+        return [dataclasses.replace(only, negated=not only.negated)]
+    return [ConjunctiveNegation(tuple(elements))] if elements else []
+
+
+def _walk(value: object) -> Iterator[object]:
+    """Every dataclass instance and leaf inside a production, depth first, in order."""
+    yield value
+    if isinstance(value, tuple):
+        for item in value:
+            yield from _walk(item)
+    elif dataclasses.is_dataclass(value) and not isinstance(value, type):
+        for f in dataclasses.fields(value):
+            if f.name != "location":
+                yield from _walk(getattr(value, f.name))
+
+
+def _rename(value: Any, names: dict[str, str]) -> Any:
+    if isinstance(value, Var):
+        return Var(names.get(value.name, value.name))
+    if isinstance(value, tuple):
+        return tuple(_rename(item, names) for item in value)
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        changes = {
+            f.name: _rename(getattr(value, f.name), names)
+            for f in dataclasses.fields(value)
+            if f.name != "location"
+        }
+        return dataclasses.replace(value, **changes)
+    return value
+
+
+def _name_placeholders(production: Production) -> Production:
+    """Give fresh variables the kernel's names: ``<letter*n>``, n counting per letter from 1
+    in creation order and skipping names the production already uses."""
+    placeholders, used = set(), set()
+    for item in _walk((production.conditions, production.actions)):
+        if isinstance(item, Var):
+            (placeholders if item.name.startswith(_PLACEHOLDER) else used).add(item.name)
+    if not placeholders:
+        return production
+    counters: dict[str, int] = {}
+    names: dict[str, str] = {}
+    for placeholder in sorted(placeholders):
+        letter = placeholder[9:]
+        while True:
+            counters[letter] = counters.get(letter, 0) + 1
+            candidate = f"{letter}*{counters[letter]}"
+            if candidate not in used:
+                break
+        names[placeholder] = candidate
+    return _rename(production, names)
+
+
+# ----------------------------------------------------------------------- semantic checks
+
+
+def _check_production(production: Production, functions: Collection[str]) -> None:
+    """The load-time checks of the kernel (and our refusal of exec/cmd)."""
+    for item in _walk(production.actions):
+        if isinstance(item, FuncCall):
+            _check_function(production, item, functions)
+    _check_grounded(production)
+    _check_binary_preferences(production)
+
+
+def _check_function(production: Production, call: FuncCall, functions: Collection[str]) -> None:
+    if call.name in REFUSED_RHS_FUNCTIONS:
+        raise SoarSemanticError(
+            production.name,
+            f"RHS function '{call.name}' is refused: {_REFUSAL}",
+            production.location,
+        )
+    if call.name not in functions:
+        known = " ".join(sorted(functions))
+        raise SoarSemanticError(
+            production.name,
+            f"unknown RHS function '{call.name}' (known functions: {known})",
+            production.location,
+        )
+
+
+def _lhs_bound(elements: tuple[ConditionElement, ...]) -> set[str]:
+    """Variables bound by equality tests of the positive top-level conditions."""
+    bound: set[str] = set()
+    for element in elements:
+        if isinstance(element, Condition) and not element.negated:
+            for test in (element.id_test, element.attr_test, element.value_test):
+                tests = test.tests if isinstance(test, Conjunction) else (test,)
+                bound.update(t.name for t in tests if isinstance(t, Var))
+    return bound
+
+
+def _check_grounded(production: Production) -> None:
+    """Kernel rule: an action's identifier must be bound on the LHS or created as the
+    attribute, value or referent of an action that is itself grounded; a function's
+    arguments must be bound the same way."""
+    grounded = _lhs_bound(production.conditions)
+    makes = [a for a in production.actions if isinstance(a, MakeAction)]
+    changed = True
+    while changed:
+        changed = False
+        for action in makes:
+            if action.id.name in grounded:
+                for value in (action.attr, action.value, action.referent):
+                    if isinstance(value, Var) and value.name not in grounded:
+                        grounded.add(value.name)
+                        changed = True
+    for action in production.actions:
+        for var in _ungrounded(action, grounded):
+            raise SoarSemanticError(
+                production.name,
+                f"the action {_describe_action(action)} uses <{var}>, which is neither tested "
+                "in a positive condition on the LHS nor created by another action",
+                production.location,
+            )
+
+
+def _ungrounded(action: Action, grounded: set[str]) -> list[str]:
+    if isinstance(action, MakeAction) and action.id.name not in grounded:
+        return [action.id.name]
+    calls = [item for item in _walk(action) if isinstance(item, FuncCall)]
+    return [
+        arg.name
+        for call in calls
+        for arg in call.args
+        if isinstance(arg, Var) and arg.name not in grounded
+    ]
+
+
+def _describe_action(action: Action) -> str:
+    from sann.soar.printer import format_action
+
+    return format_action(action)
+
+
+def _check_binary_preferences(production: Production) -> None:
+    for action in production.actions:
+        if (
+            isinstance(action, MakeAction)
+            and action.referent is not None
+            and isinstance(action.attr, Const)
+            and action.attr.value != "operator"
+        ):
+            raise SoarSemanticError(
+                production.name,
+                f"binary preference '{action.preference}' in {_describe_action(action)}: "
+                "binary preferences are legal only on ^operator",
+                production.location,
+            )
+
+
+# -------------------------------------------------------------------------------- errors
+
+#: Lark terminal names -> words for "expected ..." in error messages.
+_READABLE = {
+    "SP": "'sp'", "STATE": "'state'", "IMPASSE": "'impasse'", "ARROW": "'-->'",
+    "LPAR": "'('", "RPAR": "')'", "LBRACE": "'{'", "RBRACE": "'}'", "CIRCUMFLEX": "'^'",
+    "DOT": "'.'", "COMMA": "','", "SEMICOLON": "';'", "BANG": "'!'", "TILDE": "'~'",
+    "MINUS": "'-'", "PLUS": "'+'", "LT": "'<'", "GT": "'>'", "EQ": "'='", "NE": "'<>'",
+    "LE": "'<='", "GE": "'>='", "LEG": "'<=>'", "LTLT": "'<<'", "GTGT": "'>>'", "AT": "'@'",
+    "NOTAT": "'!@'", "FLAG": "flag (:o-support, :i-support, :default, ...)",
+    "VARIABLE": "variable", "SYMBOL": "symbol", "IDLIKE": "symbol", "INT": "integer",
+    "FLOAT": "float", "QSTRING": "|string|", "DQSTRING": '"string"',
+    "COMMAND_NAME": "command", "SHELL_COMMAND": "command", "WORD": "argument",
+    "_NL": "end of line", "$END": "end of input",
+}  # fmt: skip
+
+
+def _readable(names: Collection[str]) -> tuple[str, ...]:
+    return tuple(sorted({_READABLE.get(name, name) for name in names}))
+
+
+def _source_line(text: str, line: int) -> str:
+    lines = text.splitlines()
+    return lines[line - 1] if 1 <= line <= len(lines) else ""
+
+
+def _syntax_error(
+    text: str, file: str, message: str, line: int, column: int, expected: tuple[str, ...] = ()
+) -> SoarSyntaxError:
+    line, column = max(1, line), max(1, column)
+    return SoarSyntaxError(message, file, line, column, _source_line(text, line), expected)
+
+
+def _end_position(text: str) -> tuple[int, int]:
+    lines = text.split("\n")
+    return len(lines), len(lines[-1]) + 1
+
+
+def _describe_token(token: Token) -> str:
+    if token.type == "$END":
+        return "end of input"
+    if token.type == "_NL":
+        return "end of line"
+    text = str(token)
+    shown = f"'{text}'" if text.isprintable() and "'" not in text else repr(text)
+    kind = _READABLE.get(token.type, "")
+    if kind.startswith("'") or token.type in ("COMMAND_NAME", "WORD"):
+        return shown
+    return f"{kind} {shown}"
+
+
+def _from_lark(error: UnexpectedInput, text: str, file: str) -> SoarSyntaxError:
+    """Translate any Lark parse error into a SoarSyntaxError with a position."""
+    if isinstance(error, UnexpectedToken) and error.token.type != "$END":
+        token = error.token
+        expected = _readable(error.accepts or error.expected)
+        message = f"unexpected {_describe_token(token)}"
+        return _syntax_error(text, file, message, token.line or 1, token.column or 1, expected)
+    if isinstance(error, UnexpectedCharacters):
+        char = text[error.pos_in_stream] if error.pos_in_stream < len(text) else ""
+        expected = _readable(error.allowed or ())
+        message = f"unexpected character {char!r}"
+        return _syntax_error(text, file, message, error.line, error.column, expected)
+    expected = _readable(getattr(error, "expected", None) or ())
+    line, column = _end_position(text)
+    return _syntax_error(text, file, "unexpected end of input", line, column, expected)
+
+
+# ---------------------------------------------------------------------------- public API
+
+
+def parse(
+    text: str, file: str = "<string>", functions: Collection[str] = KNOWN_RHS_FUNCTIONS
+) -> list[Production | Command]:
+    """Parse a rule file: its productions and commands in file order.
+
+    ``functions`` is the set of RHS function names a production may call. Raises
+    SoarSyntaxError (with file, line, column) or SoarSemanticError (naming the production);
+    the first error stops the parse, as in the kernel.
+    """
+    parser = _parser()
+    try:
+        tree = parser.parse(text)
+    except (UnexpectedToken, UnexpectedCharacters, UnexpectedEOF) as error:
+        raise _from_lark(error, text, file) from None
+    except LarkError as error:  # defensive: any other Lark failure still gets a position
+        line, column = _end_position(text)
+        raise _syntax_error(text, file, f"cannot parse: {error}", line, column) from None
+    try:
+        return _ToDataclasses(text, file, functions).transform(tree)
+    except VisitError as error:
+        if isinstance(error.orig_exc, SoarSyntaxError | SoarSemanticError):
+            raise error.orig_exc from None
+        raise
+
+
+def parse_file(path: str | Path, functions: Collection[str] = KNOWN_RHS_FUNCTIONS) -> list:
+    """Parse a rule file from disk; errors name the file."""
+    path = Path(path)
+    return parse(path.read_text(encoding="utf-8"), str(path), functions)
+
+
+def parse_production(text: str, functions: Collection[str] = KNOWN_RHS_FUNCTIONS) -> Production:
+    """Parse text that holds exactly one ``sp {...}`` and nothing else."""
+    items = parse(text, functions=functions)
+    if len(items) != 1 or not isinstance(items[0], Production):
+        kinds = ", ".join(type(item).__name__ for item in items) or "nothing"
+        location = next((i.location for i in items if i.location), None)
+        line, column = (location.line, location.column) if location else (1, 1)
+        raise _syntax_error(
+            text, "<string>", f"expected exactly one production, found {kinds}", line, column
+        )
+    return items[0]
