@@ -76,10 +76,15 @@ class DetectConfig:
     #: Candidates closer than this (mm, centre to centre) are one cup; cups touching side by
     #: side are at least a diameter (87 mm) apart, end to end even more.
     nms_radius_mm: float = 45.0
+    #: Before ICP, hypotheses are thinned less: a wrong view scoring higher than the right one
+    #: on the same cup must not suppress it before verification can tell them apart.
+    pre_nms_radius_mm: float = 20.0
     icp: bool | None = None  # None: on for "patch", off for "linemod"
     max_icp_candidates: int = 30
     #: An ICP result is kept only if enough depth points lie within ICP's final gate.
     min_icp_inliers: int = 150
+    #: ... and if the refined pose agrees with the depth image (see ``depth_agreement``).
+    min_agreement: float = 0.6
     max_detections: int = MAX_DETECTIONS
 
     def __post_init__(self) -> None:
@@ -226,8 +231,45 @@ def _scene_points(depth_mm: np.ndarray, K: np.ndarray, window: np.ndarray,
     return np.stack([(uu + x0 - K[0, 2]) * z / K[0, 0], (vv + y0 - K[1, 2]) * z / K[1, 1], z], 1)
 
 
+def depth_agreement(model: ModelCloud, rotation: np.ndarray, translation: np.ndarray,
+                    depth_mm: np.ndarray, K: np.ndarray, tolerance: float = 8.0) -> float:
+    """How well a pose explains the depth image: agreeing / (agreeing + contradicting) points.
+
+    The model's surface points facing the camera are projected into the image. A point agrees
+    when the measured depth is within ``tolerance`` of it, is occluded (neutral) when something
+    lies in front of it, and contradicts when the camera sees past it (farther, or no reading).
+    A cup put where there is none, or the right cup turned end over end, contradicts a lot.
+    """
+    pts = model.points @ rotation.T + translation
+    nrm = model.normals @ rotation.T
+    facing = np.einsum("ij,ij->i", nrm, pts) < 0.0
+    pts = pts[facing]
+    h, w = depth_mm.shape
+    u = np.rint(pts[:, 0] * K[0, 0] / pts[:, 2] + K[0, 2]).astype(np.int64)
+    v = np.rint(pts[:, 1] * K[1, 1] / pts[:, 2] + K[1, 2]).astype(np.int64)
+    inside = (u >= 0) & (u < w) & (v >= 0) & (v < h)
+    if not inside.any():
+        return 0.0
+    measured = depth_mm[v[inside], u[inside]].astype(np.float64)
+    z = pts[inside, 2]
+    agree = np.abs(measured - z) <= tolerance
+    contradict = (measured == 0) | (measured > z + tolerance)
+    n = agree.sum() + contradict.sum()
+    return float(agree.sum() / n) if n else 0.0
+
+
+def _flipped(rotation: np.ndarray) -> np.ndarray:
+    """The same cup turned end over end (axis reversed, centre kept)."""
+    return rotation @ np.diag([1.0, -1.0, -1.0])
+
+
 def _refine(cands: Candidates, order: np.ndarray, depth_mm: np.ndarray, K: np.ndarray,
             config: DetectConfig) -> list[Detection]:
+    """ICP from each hypothesis and from its end-over-end twin; keep the better-verified one.
+
+    A cup seen from the side is nearly symmetric end to end (a slightly tapered cylinder), so
+    LineMod sometimes picks the reversed view and ICP, being local, cannot turn it over.
+    """
     model = cup_model_cloud()
     out = []
     for i in order:
@@ -235,12 +277,20 @@ def _refine(cands: Candidates, order: np.ndarray, depth_mm: np.ndarray, K: np.nd
         if len(pts) < config.min_icp_inliers:
             continue
         stride = max(1, len(pts) // 1500)
-        res = icp_point_to_plane(model, pts[::stride], cands.rotation[i], cands.position[i])
-        if res.n_inliers * stride < config.min_icp_inliers:
+        best = None
+        for rot in (cands.rotation[i], _flipped(cands.rotation[i])):
+            res = icp_point_to_plane(model, pts[::stride], rot, cands.position[i])
+            if res.n_inliers * stride < config.min_icp_inliers:
+                continue
+            if np.linalg.norm(res.translation - cands.position[i]) > config.nms_radius_mm:
+                continue
+            fit = depth_agreement(model, res.rotation, res.translation, depth_mm, K)
+            if best is None or fit > best[0]:
+                best = (fit, res)
+        if best is None or best[0] < config.min_agreement:
             continue
-        if np.linalg.norm(res.translation - cands.position[i]) > config.nms_radius_mm:
-            continue
-        out.append(Detection(res.translation, res.rotation, float(cands.score[i])))
+        fit, res = best
+        out.append(Detection(res.translation, res.rotation, float(cands.score[i] * fit)))
     return out
 
 
@@ -265,7 +315,8 @@ def detect_cups(rgb: np.ndarray, depth_mm: np.ndarray, K: np.ndarray,
         index = index[patch_filter(templates, matches, config.rule)]
     cands = coarse_poses(templates, matches, index, np.asarray(depth_mm), K)
     limit = config.max_icp_candidates if config.use_icp else config.max_detections
-    order = nms_3d(cands.position, cands.score, config.nms_radius_mm, limit)
+    radius = config.pre_nms_radius_mm if config.use_icp else config.nms_radius_mm
+    order = nms_3d(cands.position, cands.score, radius, limit)
     if not config.use_icp:
         return [Detection(cands.position[i], cands.rotation[i], float(cands.score[i]))
                 for i in order]
