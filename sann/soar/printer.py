@@ -87,7 +87,7 @@ def format_test(test: Test, keyword_safe: bool = False) -> str:
     if isinstance(test, Relational):
         return f"{test.op} {format_test(test.operand)}"
     if isinstance(test, Disjunction):
-        return "<< " + " ".join(format_constant(c.value) for c in test.values) + " >>"
+        return " ".join(["<<", *(format_constant(c.value) for c in test.values), ">>"])
     if isinstance(test, Conjunction):
         return "{ " + " ".join(format_test(t) for t in test.tests) + " }"
     raise TypeError(f"not a Soar test: {test!r}")

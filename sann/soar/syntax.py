@@ -304,11 +304,7 @@ class _ToDataclasses(Transformer):
         values = avt.values or ((self._placeholder(_first_letter(attr)), False),)
         step_goal = goal if ident is id_test else None
         last = [Condition(ident, attr, v, acceptable=plus, goal=step_goal) for v, plus in values]
-        if not avt.negated:
-            return [*chain, *last]
-        if chain:
-            return [ConjunctiveNegation((*chain, *last))]
-        return [dataclasses.replace(c, negated=True) for c in last]
+        return _negate([*chain, *last]) if avt.negated else [*chain, *last]
 
     def condition(self, items: list) -> list[ConditionElement]:
         return items[0]
@@ -338,13 +334,16 @@ class _ToDataclasses(Transformer):
         self, items: list
     ) -> Iterator[tuple[RhsValue, tuple[tuple[str, RhsValue | None], ...]]]:
         """Soar's rule: a binary sign (``> < =``) takes the next value as its referent unless
-        a comma, ``^`` or ``)`` follows it; ``+ - ! ~ @`` are always unary."""
+        a comma, ``^`` or ``)`` follows it; ``+ - ! ~ @`` are always unary; one comma may
+        follow a value or a preference."""
         i = 0
         while i < len(items):
             value = items[i]
             if isinstance(value, Token | _Preference):
                 raise self._item_error(value, "a value before the preference")
             i += 1
+            if i < len(items) and _is_comma(items[i]):
+                i += 1  # the kernel reads `^a b, +` like `^a b +`
             prefs: list[tuple[str, RhsValue | None]] = []
             while i < len(items) and isinstance(items[i], _Preference):
                 pref = items[i]
@@ -359,8 +358,6 @@ class _ToDataclasses(Transformer):
                     i += 1
                 if i < len(items) and _is_comma(items[i]):
                     i += 1
-            if i < len(items) and _is_comma(items[i]):
-                raise self._item_error(items[i], "a preference before ','")
             yield value, tuple(prefs) or (("+", None),)
 
     def _item_error(self, item: object, expected: str) -> SoarSyntaxError:
