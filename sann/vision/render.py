@@ -147,7 +147,16 @@ class _Scene:
         return self.cup_albedo[face] * (AMBIENT + (1.0 - AMBIENT) * lambert)[:, None]
 
 
-_POOL = ThreadPoolExecutor(max_workers=TRACE_THREADS)
+_POOLS: dict[int, ThreadPoolExecutor] = {}
+
+
+def _pool() -> ThreadPoolExecutor:
+    """The tracing threads of this process (a forked worker must not inherit dead ones)."""
+    pid = os.getpid()
+    if pid not in _POOLS:
+        _POOLS.clear()
+        _POOLS[pid] = ThreadPoolExecutor(max_workers=TRACE_THREADS)
+    return _POOLS[pid]
 
 
 def _trace(scene: rtcore_scene.EmbreeScene, rays: np.ndarray) -> dict[str, np.ndarray]:
@@ -155,7 +164,7 @@ def _trace(scene: rtcore_scene.EmbreeScene, rays: np.ndarray) -> dict[str, np.nd
     if len(rays) < 4096 or TRACE_THREADS == 1:
         return scene.run(np.zeros_like(rays), rays, output=1)
     chunks = np.array_split(rays, TRACE_THREADS)
-    parts = list(_POOL.map(lambda r: scene.run(np.zeros_like(r), r, output=1), chunks))
+    parts = list(_pool().map(lambda r: scene.run(np.zeros_like(r), r, output=1), chunks))
     return {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
 
 

@@ -1,0 +1,112 @@
+"""Vision benchmark: scene synthesis (piles, rendering, labels) and pose estimation.
+
+Usage::
+
+    .venv/bin/python benchmarks/vision.py [--frames 30] [--piles 10] [--seed 0]
+
+Scene part (this file's ``scene_part``), in one process on the same inputs:
+
+(a) render: median time of ``render`` for a 10-cup pile at 640 x 480 (depth, colour,
+    instance ids), after a first cold frame that also renders and caches the empty box.
+    Target <= 50 ms.  Also the single-cup template render (``render_cup``), target <= 10 ms.
+(b) piles: wall time of ``make_pile`` for 10 cups (MuJoCo), over several seeds; target
+    about a second at most.  Also the ground-truth labels of a pile (``label_pile``).
+
+Every time is also printed as a ratio to an anchor measured in the same run: sorting 10^6
+float64 numbers with ``np.sort`` (seeded), so figures from different machines or loads can be
+compared.  The pose-estimation part lives in its own function and is appended to the report.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from sann.vision.camera import default_camera, make_pose, rotation_to
+from sann.vision.labels import label_pile
+from sann.vision.piles import make_pile
+from sann.vision.render import render, render_cup
+
+RENDER_TARGET_S = 0.050
+CUP_TARGET_S = 0.010
+PILE_TARGET_S = 1.0
+
+
+def timed(fn: Callable[[], object], repeat: int) -> list[float]:
+    """Wall times (s) of ``repeat`` calls."""
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - start)
+    return times
+
+
+def anchor_time(repeat: int = 7) -> float:
+    """Median time of np.sort on 10^6 seeded float64: the machine/load yardstick."""
+    data = np.random.default_rng(0).random(1_000_000)
+    return statistics.median(timed(lambda: np.sort(data), repeat))
+
+
+def report(name: str, seconds: float, anchor: float, target: float | None = None) -> None:
+    verdict = "" if target is None else (" ok" if seconds <= target else " OVER TARGET")
+    goal = "" if target is None else f"  (target {target * 1e3:.0f} ms{verdict})"
+    print(f"  {name:<38} {seconds * 1e3:8.1f} ms  = {seconds / anchor:6.2f} x anchor{goal}")
+
+
+def scene_part(frames: int, piles: int, seed: int, anchor: float) -> dict[str, float]:
+    """Render, template-render, pile and label timings; returns the medians in seconds."""
+    camera = default_camera()
+    pile_times: list[float] = []
+    made = []
+    for k in range(piles):
+        start = time.perf_counter()
+        made.append(make_pile(10, seed + k))
+        pile_times.append(time.perf_counter() - start)
+    pile = made[0]
+    cold = timed(lambda: render(pile, camera), 1)[0]
+    warm = statistics.median(timed(lambda: render(pile, camera), frames))
+    rng = np.random.default_rng(seed)
+    views = [make_pose(rotation_to(rng.normal(size=3), rng.uniform(0, 2 * np.pi)),
+                       [0.0, 0.0, rng.uniform(450.0, 1000.0)]) for _ in range(frames)]
+    cup = statistics.median([timed(lambda v=v: render_cup(v), 1)[0] for v in views])
+    rendered = render(pile, camera)
+    labels = statistics.median(timed(lambda: label_pile(pile, camera, rendered), 3))
+    out = {
+        "render_10_cups": warm,
+        "render_cold": cold,
+        "render_cup": cup,
+        "pile_10_cups_median": statistics.median(pile_times),
+        "pile_10_cups_max": max(pile_times),
+        "labels": labels,
+    }
+    print(f"scene synthesis: {frames} frames, {piles} piles of 10 cups, "
+          f"{sum(p.n_cups for p in made)} cups placed, {sum(p.redrops for p in made)} re-drops")
+    report("render 10-cup pile 640x480 (median)", warm, anchor, RENDER_TARGET_S)
+    report("render first frame (caches the box)", cold, anchor)
+    report("render one cup, template (median)", cup, anchor, CUP_TARGET_S)
+    report("make_pile(10) (median)", out["pile_10_cups_median"], anchor, PILE_TARGET_S)
+    report("make_pile(10) (max)", out["pile_10_cups_max"], anchor, PILE_TARGET_S)
+    report("label_pile (median)", labels, anchor)
+    return out
+
+
+def main(argv: list[str] | None = None) -> dict[str, float]:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--frames", type=int, default=30)
+    parser.add_argument("--piles", type=int, default=10)
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args(argv)
+    anchor = anchor_time()
+    print(f"anchor: np.sort of 10^6 float64 = {anchor * 1e3:.1f} ms")
+    results = {"anchor": anchor}
+    results.update(scene_part(args.frames, args.piles, args.seed, anchor))
+    return results
+
+
+if __name__ == "__main__":
+    main()
