@@ -15,7 +15,7 @@ before the next drop.  A cup that ends outside the box is taken out and dropped 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
 import trimesh
@@ -115,7 +115,7 @@ class DropParams:
         return p / p.sum()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Pile:
     """A settled pile: cup-to-world poses (N, 4, 4) in mm, the box, and how it was made."""
 
@@ -139,6 +139,21 @@ class Pile:
     @property
     def centres(self) -> np.ndarray:
         return self.poses[:, :3, 3]
+
+    def to_dict(self) -> dict:
+        """JSON-ready description (poses as nested lists), for caching datasets."""
+        return {"poses": self.poses.tolist(), "box": asdict(self.box), "seed": self.seed,
+                "kinds": list(self.kinds), "sim_time": self.sim_time, "redrops": self.redrops,
+                "requested": self.requested}
+
+    @classmethod
+    def from_dict(cls, data: dict) -> Pile:
+        """Inverse of ``to_dict``."""
+        poses = np.asarray(data["poses"], dtype=float).reshape(-1, 4, 4)
+        return cls(poses=poses, box=Box(**data["box"]), seed=int(data["seed"]),
+                   kinds=tuple(data.get("kinds", ())), sim_time=float(data.get("sim_time", 0)),
+                   redrops=int(data.get("redrops", 0)),
+                   requested=int(data.get("requested", len(poses))))
 
 
 def _xml(n_cups: int, box: Box, params: DropParams) -> str:

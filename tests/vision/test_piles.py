@@ -7,6 +7,7 @@ from sann.vision.camera import make_pose
 from sann.vision.piles import (
     Box,
     DropParams,
+    Pile,
     cup_in_box,
     interpenetration,
     make_pile,
@@ -77,3 +78,12 @@ def test_bad_inputs():
         Box(length=-1)
     with pytest.raises(ValueError):
         make_pile(2, 0, params=DropParams(p_upright=0, p_side=0, p_upside_down=0))
+
+
+def test_pile_round_trips_through_json(piles):
+    import json
+
+    pile = piles[1]
+    again = Pile.from_dict(json.loads(json.dumps(pile.to_dict())))
+    assert np.array_equal(again.poses, pile.poses) and again.box == pile.box
+    assert again.kinds == pile.kinds and again.seed == pile.seed

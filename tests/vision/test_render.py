@@ -5,7 +5,7 @@ import pytest
 
 from sann.vision.camera import Camera, default_camera, look_at, make_pose, rotation_to
 from sann.vision.piles import Box
-from sann.vision.render import CUP_LID_RGB, render, render_cup
+from sann.vision.render import CUP_LID_RGB, add_sensor_noise, render, render_cup
 
 
 def _lid_towards_camera(distance: float) -> np.ndarray:
@@ -76,3 +76,23 @@ def test_bad_inputs():
         render(np.zeros((2, 3, 3)), Camera())
     with pytest.raises(ValueError):
         render_cup(_lid_towards_camera(600), frame="robot")
+
+
+def test_sensor_noise():
+    clean = render_cup(_lid_towards_camera(700.0))
+    noisy = add_sensor_noise(clean, seed=5)
+    again = add_sensor_noise(clean, seed=5)
+    assert np.array_equal(noisy.depth_mm, again.depth_mm) and np.array_equal(noisy.rgb, again.rgb)
+    assert np.array_equal(noisy.instance, clean.instance)
+    assert (noisy.depth_mm[clean.depth_mm == 0] == 0).all()  # no reading stays no reading
+    both = (noisy.depth_mm > 0) & (clean.depth_mm > 0)
+    err = noisy.depth_mm[both].astype(float) - clean.depth_mm[both]
+    assert 0.3 < err.std() < 2.0 and abs(err.mean()) < 0.2
+    lost = (clean.depth_mm > 0) & (noisy.depth_mm == 0)
+    assert lost.any()
+    # Readings are lost only next to a depth jump (here: the silhouette).
+    d = np.pad(clean.depth_mm.astype(int), 1, mode="edge")
+    centre = d[1:-1, 1:-1]
+    jump = np.max([np.abs(centre - d[:-2, 1:-1]), np.abs(centre - d[2:, 1:-1]),
+                   np.abs(centre - d[1:-1, :-2]), np.abs(centre - d[1:-1, 2:])], axis=0)
+    assert (jump[lost] > 15).all()
