@@ -30,7 +30,9 @@ class SoarSyntaxError(SoarError):
     def _render(self) -> str:
         text = f"{self.file}:{self.line}:{self.column}: {self.message}"
         if self.source_line:
-            caret = " " * (self.column - 1) + "^"
+            # Keep the line's tabs in the caret's indent so the caret lines up in a terminal.
+            indent = "".join(c if c == "\t" else " " for c in self.source_line[: self.column - 1])
+            caret = indent.ljust(self.column - 1) + "^"
             text += f"\n    {self.source_line.rstrip()}\n    {caret}"
         if self.expected:
             text += "\n  expected one of: " + ", ".join(self.expected)

@@ -88,7 +88,6 @@ _REFUSAL = "a rule file never runs shell commands or Python"
 # constituent character) and renamed to the kernel's `<a*1>` names once the whole production
 # is known, so that the fresh names skip every name the production already uses.
 _PLACEHOLDER = "\0"
-_IDENTIFIER = re.compile(r"[A-Za-z]\d+")
 
 
 # ------------------------------------------------------------------------------- the parser
@@ -398,7 +397,7 @@ class _ToDataclasses(Transformer):
 
     def production_name(self, items: list) -> Token:
         token = items[0]
-        if _IDENTIFIER.fullmatch(token):
+        if token.type == "IDLIKE":
             raise self._syntax_error(
                 f"production name '{token}' looks like an identifier (a letter and digits); "
                 "Soar refuses it: choose another name",
@@ -643,12 +642,20 @@ def _end_position(text: str) -> tuple[int, int]:
     return len(lines), len(lines[-1]) + 1
 
 
+# Terminals that only the root lexer can produce inside a production: when the parser's
+# state accepts none of its terminals, Lark retries with every terminal and these long
+# command-word patterns win, so the token's text is not what the user wrote as one word.
+_FALLBACK_TYPES = ("COMMAND_NAME", "WORD", "SHELL_COMMAND", "SP")
+
+
 def _describe_token(token: Token) -> str:
     if token.type == "$END":
         return "end of input"
     if token.type == "_NL":
         return "end of line"
     text = str(token)
+    if token.type in _FALLBACK_TYPES:  # the root lexer's guess: only its first character counts
+        text = text[:1]
     shown = f"'{text}'" if text.isprintable() and "'" not in text else repr(text)
     kind = _READABLE.get(token.type, "")
     if kind.startswith("'") or token.type in ("COMMAND_NAME", "WORD"):
@@ -662,6 +669,8 @@ def _from_lark(error: UnexpectedInput, text: str, file: str) -> SoarSyntaxError:
         token = error.token
         expected = _readable(error.accepts or error.expected)
         message = f"unexpected {_describe_token(token)}"
+        if token.type in _FALLBACK_TYPES and token[:1] in "|\"":
+            message = f"unterminated string: no closing {token[:1]}"
         return _syntax_error(text, file, message, token.line or 1, token.column or 1, expected)
     if isinstance(error, UnexpectedCharacters):
         char = text[error.pos_in_stream] if error.pos_in_stream < len(text) else ""
