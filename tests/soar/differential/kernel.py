@@ -40,6 +40,8 @@ DEFAULT_DECISIONS = 20000
 Value = tuple[str, Any]
 Graph = dict[str, list[tuple[Value, Value, bool]]]
 Triple = tuple[str, str, str, str]
+# Header inputs: (attr, constant) or (attr, ((child, constant), ...)).
+Inputs = tuple[tuple[str, Any], ...]
 
 
 @dataclass(frozen=True)
@@ -49,7 +51,7 @@ class AgentSpec:
     path: Path
     random: bool = False
     decisions: int = DEFAULT_DECISIONS
-    inputs: tuple[tuple[str, tuple[tuple[str, Any], ...] | Any], ...] = ()
+    inputs: Inputs = ()
 
 
 @dataclass
@@ -237,7 +239,12 @@ def parse_internal(text: str) -> list[tuple[str, Value, Value, bool]]:
 # --------------------------------------------------------------------------- trace and output
 
 _TRACE_LINE = re.compile(r"\n? *\d+: +(O|==>S): (\S+)(?: \(([^\n]*?)\))?")
-_KERNEL_NOISE = ("\nSystem halted.\n", "System halted.", "Interrupt received.", "This Agent halted.")
+_KERNEL_NOISE = (
+    "\nSystem halted.\n",
+    "System halted.",
+    "Interrupt received.",
+    "This Agent halted.",
+)
 
 
 def split_trace(text: str) -> tuple[list[str], str]:
@@ -379,15 +386,20 @@ class KernelAgent:
         }
 
 
-def run_kernel(path: str | Path, decisions: int | None = None) -> RunResult:
-    """Run an agent file in the real Soar kernel and collect a :class:`RunResult`."""
+def run_kernel(
+    path: str | Path, decisions: int | None = None, inputs: Inputs | None = None
+) -> RunResult:
+    """Run an agent file in the real Soar kernel and collect a :class:`RunResult`.
+
+    ``decisions`` and ``inputs`` override the file's header comments.
+    """
     spec = read_spec(path)
     limit = decisions if decisions is not None else spec.decisions
     with KernelAgent() as ka:
         ka.cmd(f"source {{{Path(path).resolve()}}}")
         ka.take_log()
         ka.cmd("watch 1")
-        ka.add_inputs(spec.inputs)
+        ka.add_inputs(spec.inputs if inputs is None else inputs)
         summary = ka.cmd(f"run {limit}")
         trace = ka.take_log()
         operators, output = split_trace(trace)
@@ -406,28 +418,32 @@ def run_kernel(path: str | Path, decisions: int | None = None) -> RunResult:
 # --------------------------------------------------------------------------- our engine
 
 
-def run_ours(path: str | Path, decisions: int | None = None) -> RunResult:
-    """Run an agent file in SANN's engine (``sann.soar.Agent``) and collect a RunResult."""
-    from sann.soar import Agent
+def run_ours(
+    path: str | Path, decisions: int | None = None, inputs: Inputs | None = None
+) -> RunResult:
+    """Run an agent file in SANN's engine (``sann.soar.Agent``) and collect a RunResult.
+
+    The engine writes only ``write`` output to ``out`` (trace level 0); the operator-name
+    sequence comes from ``agent.operator_sequence`` and working memory from ``agent.wmes()``.
+    """
+    from sann.soar.agent import Agent
 
     spec = read_spec(path)
     limit = decisions if decisions is not None else spec.decisions
     out = io.StringIO()
     agent = Agent(out=out)
     agent.source(str(path))
-    agent.trace(1)
-    _add_our_inputs(agent, spec.inputs)
+    agent.trace(0)
+    _add_our_inputs(agent, spec.inputs if inputs is None else inputs)
     agent.run(decisions=limit)
-    trace = out.getvalue()
-    operators, output = split_trace(trace)
     graph, roots = our_graph(agent)
     stats = {key: int(agent.stats[key]) for key in _STAT_KEYS}
     return RunResult(
         halted=bool(agent.halted),
-        operators=operators,
-        output=output,
+        operators=[str(name) for name in agent.operator_sequence],
+        output=out.getvalue(),
         wm=canonical_wm(graph, roots),
-        trace=trace,
+        trace="",
         **stats,
     )
 
@@ -446,30 +462,30 @@ def _add_our_inputs(agent: Any, inputs: Iterable[tuple[str, Any]]) -> None:
 
 
 def our_graph(agent: Any) -> tuple[Graph, list[str]]:
-    """Working memory of our engine reachable from its states, as a neutral graph.
+    """Working memory of our engine as a neutral graph, and its states (top first)."""
+    from sann.soar.memory import Identifier
 
-    Read through ``agent.print`` in Soar's ``--internal`` format when the engine offers it,
-    so the same parser serves both engines.
-    """
-    roots = _our_states(agent)
     graph: Graph = {}
-    queue = list(roots)
-    while queue:
-        ident = queue.pop()
-        if ident in graph:
-            continue
-        graph[ident] = []
-        for _, attr, value, acc in parse_internal(_our_print_internal(agent, ident)):
-            graph[ident].append((attr, value, acc))
-            for sym in (attr, value):
-                if sym[0] == "id" and sym[1] not in graph:
-                    queue.append(sym[1])
+    states: dict[str, int] = {}
+    for wme in agent.wmes():
+        for sym in (wme.id, wme.attr, wme.value):
+            if isinstance(sym, Identifier) and sym.is_state:
+                states[sym.name] = sym.level
+        triple = (_our_symbol(wme.attr), _our_symbol(wme.value), bool(wme.acceptable))
+        graph.setdefault(wme.id.name, []).append(triple)
+        if isinstance(wme.value, Identifier):
+            graph.setdefault(wme.value.name, [])
+    roots = sorted(states, key=lambda name: (states[name], name))
     return graph, roots
 
 
-def _our_states(agent: Any) -> list[str]:
-    raise NotImplementedError  # replaced once the engine's introspection API is known
-
-
-def _our_print_internal(agent: Any, ident: str) -> str:
-    raise NotImplementedError  # replaced once the engine's introspection API is known
+def _our_symbol(sym: Any) -> Value:
+    if isinstance(sym, bool):
+        raise TypeError(f"a bool is not a Soar symbol: {sym!r}")
+    if isinstance(sym, int):
+        return ("int", sym)
+    if isinstance(sym, float):
+        return ("float", sym)
+    if isinstance(sym, str):
+        return ("str", sym)
+    return ("id", sym.name)

@@ -1,0 +1,340 @@
+"""Engine benchmark: SANN's Soar engine against the real Soar 9.6 kernel (soar_sml).
+
+Usage::
+
+    .venv/bin/python benchmarks/engine.py [--scenes 2000] [--disks 11] [--seed 0] [--kernel-only]
+
+In one process and one run, on the same inputs, it times:
+
+(a) Towers of Hanoi, ``rules/hanoi.soar`` with 11 disks (2,047 moves, 2,060 decisions):
+    source the rules and run to halt. Target ours/Soar <= 10x, goal 3x.
+(b) A blocks planner over 2,000 random 26-block scenes: each scene is put on the input-link
+    through the engine's input API, the agent runs to halt, the plan is read back from the
+    output-link, the input is removed and the agent re-initialised. Target <= 3x, goal 1x.
+    The planner is ``benchmarks/data/blocks-planner.soar`` (lift off every block resting on
+    the target, top first, then the target); both engines' plans are checked against the
+    plan computed in Python, so a fast wrong engine cannot win.
+(c) The cost of adding one WME (and running one decision) to a working memory of 10 and of
+    10,000 WMEs, for both engines, and the ratio large/small (should be about 1: the cost
+    follows the change, not the size of working memory).
+
+Absolute times are printed too, but the ratios are the figures. Runs in well under two
+minutes on the 2-core machine. ``--kernel-only`` skips our engine (e.g. before it exists).
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import random
+import statistics
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+HANOI = ROOT / "rules" / "hanoi.soar"
+PLANNER = ROOT / "benchmarks" / "data" / "blocks-planner.soar"
+NAMES = [chr(ord("A") + i) for i in range(26)]
+
+sys.path.insert(0, str(ROOT / "tests" / "soar" / "differential"))
+import kernel as oracle  # noqa: E402  (the differential harness owns the kernel's lifecycle)
+
+# --------------------------------------------------------------------------- scenes
+
+
+@dataclass(frozen=True)
+class Scene:
+    """Blocks ``(name, on)`` where ``on`` is a block name or ``table``, and a target."""
+
+    blocks: tuple[tuple[str, str], ...]
+    target: str
+
+    def plan(self) -> list[str]:
+        """The expected plan: every block above the target, top first, then the target."""
+        on_top_of = {on: name for name, on in self.blocks}
+        above = []
+        current = self.target
+        while current in on_top_of:
+            current = on_top_of[current]
+            above.append(current)
+        return above[::-1] + [self.target]
+
+
+def make_scenes(count: int, size: int, seed: int) -> list[Scene]:
+    """Random piles: the blocks, shuffled, are cut into 1-6 stacks of random heights."""
+    rng = random.Random(seed)
+    scenes = []
+    for _ in range(count):
+        names = NAMES[:size]
+        rng.shuffle(names)
+        cuts = sorted(rng.sample(range(1, size), rng.randint(0, min(5, size - 1))))
+        blocks = []
+        for lo, hi in zip([0, *cuts], [*cuts, size], strict=True):
+            stack = names[lo:hi]
+            blocks += [(name, below) for name, below in zip(stack, ["table", *stack], strict=False)]
+        scenes.append(Scene(tuple(blocks), rng.choice(names)))
+    return scenes
+
+
+# --------------------------------------------------------------------------- the kernel
+
+
+class KernelPlanner:
+    """The planner in one kernel agent, scenes fed through SML's input-link API."""
+
+    def __init__(self) -> None:
+        self.ka = oracle.KernelAgent()
+        self.agent = self.ka.agent
+        self.ka.cmd(f"source {{{PLANNER}}}")
+        self.ka.cmd("watch 0")
+
+    def solve(self, scene: Scene) -> list[str]:
+        agent = self.agent
+        il = agent.GetInputLink()
+        made = []
+        for name, on in scene.blocks:
+            block = agent.CreateIdWME(il, "block")
+            agent.CreateStringWME(block, "name", name)
+            agent.CreateStringWME(block, "on", on)
+            made.append(block)
+        made.append(agent.CreateStringWME(il, "target", scene.target))
+        agent.Commit()
+        agent.RunSelf(1000)
+        plan = self._read_plan()
+        for wme in made:
+            agent.DestroyWME(wme)
+        agent.Commit()
+        agent.ExecuteCommandLine("init-soar")
+        return plan
+
+    def _read_plan(self) -> list[str]:
+        ol = self.agent.GetOutputLink()
+        steps = []
+        for i in range(ol.GetNumberChildren()):
+            child = ol.GetChild(i)
+            if child.GetAttribute() == "grasp":
+                grasp = child.ConvertToIdentifier()
+                order = int(grasp.FindByAttribute("order", 0).GetValueAsString())
+                steps.append((order, grasp.FindByAttribute("block", 0).GetValueAsString()))
+        return [name for _, name in sorted(steps)]
+
+    def close(self) -> None:
+        self.ka.__exit__()
+
+
+def kernel_hanoi(disks: int) -> tuple[int, str]:
+    """Source and run hanoi to halt in a fresh kernel agent; return decisions and output."""
+    with oracle.KernelAgent() as ka:
+        ka.cmd(f"source {{{HANOI}}}")
+        ka.cmd("watch 0")
+        ka.add_inputs([("disks", disks)])
+        ka.cmd("run")
+        return ka.agent.GetDecisionCycleCounter(), oracle.split_trace(ka.take_log())[1]
+
+
+def kernel_wme_cost(size: int, reps: int) -> float:
+    """Seconds to add one WME and run one decision, with ``size`` WMEs already present."""
+    with oracle.KernelAgent() as ka:
+        ka.cmd(TICKER)
+        ka.cmd("watch 0")
+        agent = ka.agent
+        root = agent.CreateIdWME(agent.GetInputLink(), "pile")
+        for i in range(max(0, size - 20) // 2):
+            item = agent.CreateIdWME(root, "item")
+            agent.CreateIntWME(item, "value", i)
+        agent.Commit()
+        agent.RunSelf(2)
+
+        def step(k: int) -> None:
+            agent.CreateIntWME(root, "extra", k)
+            agent.Commit()
+            agent.RunSelf(1)
+
+        def idle(_k: int) -> None:
+            agent.RunSelf(1)
+
+        return _marginal(step, idle, reps)
+
+
+# --------------------------------------------------------------------------- our engine
+
+
+class OurPlanner:
+    """The planner in one of our agents, scenes fed through ``agent.input_link``."""
+
+    def __init__(self) -> None:
+        from sann.soar import Agent
+
+        self.agent = Agent(out=io.StringIO())
+        self.agent.source(str(PLANNER))
+
+    def solve(self, scene: Scene) -> list[str]:
+        agent = self.agent
+        made = []
+        for name, on in scene.blocks:
+            block = agent.input_link.add("block")
+            block.add("name", name)
+            block.add("on", on)
+            made.append(block)
+        made.append(agent.input_link.add("target", scene.target))
+        agent.run(decisions=1000)
+        plan = self._read_plan()
+        for handle in made:
+            handle.remove()
+        agent.init()
+        return plan
+
+    def _read_plan(self) -> list[str]:
+        steps = []
+        for grasp in self.agent.output_link.children("grasp"):
+            steps.append((int(grasp.get("order")), str(grasp.get("block"))))
+        return [name for _, name in sorted(steps)]
+
+    def close(self) -> None:
+        pass
+
+
+def our_hanoi(disks: int) -> tuple[int, str]:
+    from sann.soar import Agent
+
+    out = io.StringIO()
+    agent = Agent(out=out)
+    agent.source(str(HANOI))
+    agent.input_link.add("disks", disks)
+    agent.run()
+    return int(agent.stats["decisions"]), out.getvalue()
+
+
+def our_wme_cost(size: int, reps: int) -> float:
+    from sann.soar import Agent
+
+    agent = Agent(out=io.StringIO())
+    agent.load(TICKER)
+    root = agent.input_link.add("pile")
+    for i in range(max(0, size - 20) // 2):
+        root.add("item").add("value", i)
+    agent.run(decisions=2)
+
+    def step(k: int) -> None:
+        root.add("extra", k)
+        agent.run(decisions=1)
+
+    def idle(_k: int) -> None:
+        agent.run(decisions=1)
+
+    return _marginal(step, idle, reps)
+
+
+# --------------------------------------------------------------------------- shared pieces
+
+# A top-state operator that is re-proposed every decision (so the agent never impasses or
+# halts), and a rule joining over every item of the pile so the matcher has to index it.
+TICKER = """
+sp {tick*propose (state <s> ^superstate nil -^tick) --> (<s> ^operator <o> +) (<o> ^name init)}
+sp {tick*init (state <s> ^operator.name init) --> (<s> ^tick 0)}
+sp {tick*propose*tick (state <s> ^tick <t>) --> (<s> ^operator <o> +) (<o> ^name tick ^at <t>)}
+sp {tick*apply (state <s> ^operator <o> ^tick <t>) (<o> ^name tick ^at <t>)
+   --> (<s> ^tick <t> - (+ <t> 1))}
+sp {tick*watch*items (state <s> ^io.input-link.pile.item <i>) (<i> ^value < 0) --> (<s> ^odd <i>)}
+sp {tick*watch*extra (state <s> ^io.input-link.pile.extra <x>) --> (<s> ^seen <x>)}
+"""
+
+
+def _marginal(step: Callable[[int], None], idle: Callable[[int], None], reps: int) -> float:
+    """Median cost of ``step`` minus median cost of ``idle`` (the decision alone)."""
+    with_add, without = [], []
+    for k in range(reps):
+        t0 = time.perf_counter()
+        step(k)
+        t1 = time.perf_counter()
+        idle(k)
+        t2 = time.perf_counter()
+        with_add.append(t1 - t0)
+        without.append(t2 - t1)
+    return max(0.0, statistics.median(with_add) - statistics.median(without)) + 1e-9
+
+
+def timed(fn: Callable[[], Any]) -> tuple[float, Any]:
+    t0 = time.perf_counter()
+    value = fn()
+    return time.perf_counter() - t0, value
+
+
+def run_planner(planner: Any, scenes: list[Scene]) -> tuple[float, int]:
+    """Seconds for all scenes, and how many plans were wrong."""
+    wrong = 0
+    t0 = time.perf_counter()
+    for scene in scenes:
+        if planner.solve(scene) != scene.plan():
+            wrong += 1
+    elapsed = time.perf_counter() - t0
+    planner.close()
+    return elapsed, wrong
+
+
+def verdict(ratio: float, target: float, goal: float) -> str:
+    if ratio <= goal:
+        return f"meets the goal ({goal:g}x)"
+    if ratio <= target:
+        return f"meets the target ({target:g}x), not the goal ({goal:g}x)"
+    return f"MISSES the target ({target:g}x)"
+
+
+# --------------------------------------------------------------------------- main
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scenes", type=int, default=2000)
+    parser.add_argument("--disks", type=int, default=11)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--reps", type=int, default=300, help="repetitions per WME-cost point")
+    parser.add_argument("--kernel-only", action="store_true")
+    args = parser.parse_args(argv)
+    if not 1 <= args.disks <= 20 or args.scenes < 1:
+        parser.error("--disks must be 1..20 and --scenes positive")
+    ours = not args.kernel_only
+    if ours:
+        try:
+            import sann.soar.agent  # noqa: F401
+        except ImportError as exc:
+            print(f"our engine is not importable ({exc}); measuring the kernel only")
+            ours = False
+
+    print(f"(a) Towers of Hanoi, {args.disks} disks ({HANOI.relative_to(ROOT)})")
+    k_time, (k_dec, k_out) = timed(lambda: kernel_hanoi(args.disks))
+    print(f"    Soar kernel: {k_time:8.3f} s  {k_dec} decisions  {k_out.strip()}")
+    if ours:
+        o_time, (o_dec, o_out) = timed(lambda: our_hanoi(args.disks))
+        ratio = o_time / k_time
+        print(f"    ours:        {o_time:8.3f} s  {o_dec} decisions  {o_out.strip()}")
+        print(f"    ratio ours/Soar = {ratio:.2f}x  -> {verdict(ratio, 10, 3)}")
+
+    scenes = make_scenes(args.scenes, 26, args.seed)
+    print(f"(b) Blocks planner, {len(scenes)} random 26-block scenes ({PLANNER.relative_to(ROOT)})")
+    k_time, k_wrong = run_planner(KernelPlanner(), scenes)
+    print(f"    Soar kernel: {k_time:8.3f} s  {k_wrong} wrong plans")
+    if ours:
+        o_time, o_wrong = run_planner(OurPlanner(), scenes)
+        ratio = o_time / k_time
+        print(f"    ours:        {o_time:8.3f} s  {o_wrong} wrong plans")
+        print(f"    ratio ours/Soar = {ratio:.2f}x  -> {verdict(ratio, 3, 1)}")
+
+    print("(c) Adding one WME (and running one decision), working memory of 10 vs 10,000 WMEs")
+    engines = [("Soar kernel", kernel_wme_cost)] + ([("ours", our_wme_cost)] if ours else [])
+    for label, cost in engines:
+        small, large = cost(10, args.reps), cost(10_000, args.reps)
+        print(
+            f"    {label:12s} {small * 1e6:9.1f} us at 10, {large * 1e6:9.1f} us at 10,000"
+            f"  -> ratio {large / small:.2f}"
+        )
+    oracle.shutdown_kernel()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
