@@ -1,0 +1,1139 @@
+"""The Soar agent: working memory, the decision cycle, trace, stats and print.
+
+The cycle follows the Soar 9.6 kernel phase by phase (input, propose, decide, apply,
+output), including the details that change what users observe:
+
+- elaboration cycles run level by level (the kernel's "waterfall"): each cycle fires the
+  pending i-assertions and retractions of the highest goal that has any, and in the apply
+  phase, when a goal has no i-activity left, its o-assertions (``PE`` cycles);
+- a selected operator whose proposal stops matching is removed at once, and the goal stack
+  is re-checked for consistency with the current preferences whenever the active level
+  changes or a goal moves from i- to o-firing; an inconsistent decision ends the phase;
+- ``run N`` stops before the apply phase of the Nth decision, like the kernel's default
+  stop phase, so that ``run 1`` twice equals ``run 2``.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from collections.abc import Iterable, Iterator
+from pathlib import Path
+from typing import TextIO
+
+from . import decide as dec
+from .errors import SoarError, SoarRuntimeError
+from .goals import Goal
+from .instantiation import (
+    Instantiation,
+    ProductionInfo,
+    is_o_supported,
+    match_goal,
+    tested_operators,
+)
+from .memory import WME, Identifier, IdentifierFactory, Symbol
+from .preferences import ACCEPTABLE, REJECT, REQUIRE, Preference, Slot, preference_type
+from .production import Command, Const, FuncCall, MakeAction, Production, Var
+from .rhs import FUNCTIONS, format_value
+from .trace import print_identifier, trace_preference, trace_wme
+
+PHASES = ("input", "propose", "decide", "apply", "output")
+
+
+def _default_matcher() -> type:
+    from .rete import Rete
+
+    return Rete
+
+
+def _vkey(value: Symbol) -> object:
+    """Dictionary key of a value: ``1`` and ``1.0`` are different Soar symbols."""
+    return value if type(value) is not float else (float, value)
+
+
+class Agent:
+    """A Soar agent. See the module docstring for the cycle; the README for the API."""
+
+    def __init__(
+        self,
+        name: str = "soar",
+        *,
+        matcher: type | None = None,
+        seed: int | None = None,
+        out: TextIO | None = None,
+    ) -> None:
+        self.name = name
+        self._matcher_class = matcher or _default_matcher()
+        self.out = out
+        self.trace_level = 0
+        self.max_elaborations = 100
+        self.exploration = dec.Exploration()
+        self.srand(seed)
+        self._productions: dict[str, ProductionInfo] = {}
+        self._dir_stack: list[Path] = []
+        self.multi_attributes: dict[str, int] = {}
+        self.warnings = True
+        self._gensym_counter = 0
+        self.matcher = self._matcher_class()
+        self._build()
+
+    # ------------------------------------------------------------------ public API
+
+    @property
+    def productions(self) -> list[str]:
+        """Names of the loaded productions, in load order."""
+        return list(self._productions)
+
+    @property
+    def halted(self) -> bool:
+        return self._halted
+
+    @property
+    def stats(self) -> dict[str, int]:
+        """Counters named after the kernel's ``stats`` lines."""
+        return {
+            "decisions": self._decisions,
+            "elaboration_cycles": self._e_cycles,
+            "pe_cycles": self._pe_cycles,
+            "production_firings": self._firings,
+            "wme_changes": self._wme_adds + self._wme_removes,
+            "wme_additions": self._wme_adds,
+            "wme_removals": self._wme_removes,
+            "wm_size": len(self._wm),
+            "wm_max": self._wm_max,
+        }
+
+    @property
+    def top_state(self) -> Identifier:
+        return self._top.id
+
+    @property
+    def phase(self) -> str:
+        """The phase the next step starts with."""
+        return self._phase
+
+    def srand(self, seed: int | None) -> None:
+        """Seed the generator of indifferent choices (``srand``); ``None`` means seed 0."""
+        import random
+
+        self.exploration.rng = random.Random(0 if seed is None else seed)
+
+    def trace(self, level: int) -> None:
+        """0 none, 1 decisions, 2 phases, 3 firings, 4 WM changes, 5 preferences."""
+        if not 0 <= int(level) <= 5:
+            raise SoarRuntimeError(f"trace level must be 0..5, got {level}")
+        self.trace_level = int(level)
+
+    def load(self, text: str, file: str = "<string>") -> None:
+        """Load productions and run commands from rule-file text."""
+        from . import commands
+        from .syntax import parse
+
+        base = Path(file).resolve().parent if not file.startswith("<") else Path.cwd()
+        for item in parse(text, file, FUNCTIONS.keys()):
+            if isinstance(item, Production):
+                self.add_production(item)
+            elif isinstance(item, Command):
+                commands.execute(self, item, base)
+
+    def source(self, path: str | os.PathLike[str]) -> None:
+        """Load a rule file; relative paths resolve against the current source directory."""
+        resolved = self._resolve(path)
+        if not resolved.is_file():
+            raise SoarRuntimeError(f"source: cannot open {path}")
+        self._dir_stack.append(resolved.parent)
+        try:
+            self.load(resolved.read_text(encoding="utf-8"), str(resolved))
+        finally:
+            self._dir_stack.pop()
+
+    def _resolve(self, path: str | os.PathLike[str]) -> Path:
+        candidate = Path(path)
+        if not candidate.is_absolute() and self._dir_stack:
+            candidate = self._dir_stack[-1] / candidate
+        return candidate.resolve()
+
+    def add_production(self, production: Production) -> None:
+        """Add a parsed production; one with the same name replaces the old one."""
+        if production.name in self._productions:
+            self.excise(production.name)
+        self.matcher.add_production(production)
+        self._productions[production.name] = ProductionInfo.of(production)
+
+    def excise(self, name: str) -> None:
+        """Remove a production; its i-supported preferences retract in the next cycle."""
+        if name not in self._productions:
+            raise SoarRuntimeError(f"excise: no production named {name}")
+        self.matcher.excise(name)
+        del self._productions[name]
+        self._collect_changes()
+
+    def excise_all(self) -> None:
+        for name in list(self._productions):
+            self.excise(name)
+
+    def init(self) -> None:
+        """``init-soar``: clear working memory and counters, keep the rules, rebuild S1."""
+        productions = [info.production for info in self._productions.values()]
+        self.matcher = self._matcher_class()
+        self._productions = {}
+        self._build()
+        for production in productions:
+            self.add_production(production)
+
+    def run(self, decisions: int | None = None) -> dict[str, int]:
+        """Run until halt or interrupt, or until ``decisions`` more decisions were made."""
+        if decisions is not None and decisions < 0:
+            raise SoarRuntimeError(f"run: decision count must be >= 0, got {decisions}")
+        self._stop = False
+        target = None if decisions is None else self._decisions + decisions
+        if decisions == 0:
+            return self.stats
+        while not self._halted and not self._stop:
+            self._run_phase()
+            if target is not None and self._decisions >= target and self._phase == "apply":
+                break
+        return self.stats
+
+    def step(self) -> dict[str, int]:
+        """One decision cycle (stopping before the next apply phase, like ``run 1``)."""
+        return self.run(1)
+
+    def wmes(self) -> Iterator[WME]:
+        """Every WME in working memory, oldest first."""
+        return iter(sorted(self._wm.values(), key=lambda w: w.timetag))
+
+    def print(self, identifier: str | Identifier, depth: int = 1) -> str:
+        """The kernel's ``print --depth N <id>`` text."""
+        ident = self.find_identifier(identifier)
+        return print_identifier(ident, depth, self._augmentations)
+
+    def find_identifier(self, identifier: str | Identifier) -> Identifier:
+        if isinstance(identifier, Identifier):
+            return identifier
+        name = str(identifier).upper()
+        for wme in self._wm.values():
+            for sym in (wme.id, wme.value):
+                if isinstance(sym, Identifier) and sym.name == name:
+                    return sym
+        raise SoarRuntimeError(f"There is no identifier {identifier}.")
+
+    @property
+    def operator_sequence(self) -> list[str]:
+        """Names of the operators selected so far (``?`` for an operator without a name)."""
+        return list(self._operator_names)
+
+    @property
+    def input_link(self):  # type: ignore[no-untyped-def]
+        from .io import InputHandle
+
+        return InputHandle(self, self._input_link_id, None)
+
+    @property
+    def output_link(self):  # type: ignore[no-untyped-def]
+        from .io import OutputHandle
+
+        return OutputHandle(self, self._output_link_id)
+
+    # -------------------------------------------------------------- RHS context
+
+    def write_output(self, text: str) -> None:
+        self._emit(text)
+
+    def request_halt(self) -> None:
+        self._halted = True
+        self._stop = True
+
+    def request_interrupt(self) -> None:
+        self._stop = True
+
+    def decision_count(self) -> int:
+        return self._decisions
+
+    def gensym(self, prefix: str) -> str:
+        existing = {w.value for w in self._wm.values() if isinstance(w.value, str)}
+        while True:
+            self._gensym_counter += 1
+            name = f"{prefix}{self._gensym_counter}"
+            if name not in existing:
+                return name
+
+    # ------------------------------------------------------------ construction
+
+    def _build(self) -> None:
+        """Fresh working memory and counters, then the top state as the kernel makes it."""
+        self._ids = IdentifierFactory()
+        self._timetag = 0
+        self._wm: dict[int, WME] = {}
+        self._slots: dict[Identifier, dict[object, Slot]] = {}
+        self._arch: dict[Identifier, list[WME]] = {}
+        self._level: dict[Identifier, int] = {}
+        self._goals: dict[Identifier, Goal] = {}
+        self._inst_of: dict[object, Instantiation] = {}
+        self._pending_goal: dict[object, Goal] = {}
+        self._nil_retractions: list[Instantiation] = []
+        self._changed: list[Slot] = []
+        self._changed_context: list[Slot] = []
+        self._dependents: dict[WME, list[Instantiation]] = {}
+        self._gds_index: dict[WME, set[Goal]] = {}
+        self._input_ops: list[tuple] = []
+        self._input_wmes: dict[Identifier, list[WME]] = {}
+        self._operator_names: list[str] = []
+        self._decisions = self._e_cycles = self._pe_cycles = self._firings = 0
+        self._wme_adds = self._wme_removes = self._wm_max = 0
+        self._halted = False
+        self._stop = False
+        self._phase = "input"
+        self._active: Goal | None = None
+        self._active_type = ""
+        self._phase_cycles = 0
+        self._justifications = 0
+        top = self._ids.new("S", level=1)
+        self._top = self._new_goal(top, None)
+        self._io_id = self._ids_new_after_top(top)
+        self._collect_changes()
+
+    def _ids_new_after_top(self, top: Identifier) -> Identifier:
+        io = self._ids.new("I", level=None)
+        self._level[io] = 1
+        self._add_arch(top, "io", io)
+        self._input_link_id = self._new_id("I", 1)
+        self._output_link_id = self._new_id("I", 1)
+        self._add_arch(io, "input-link", self._input_link_id)
+        self._add_arch(io, "output-link", self._output_link_id)
+        return io
+
+    def _new_id(self, hint: str, level: int) -> Identifier:
+        ident = self._ids.new(hint)
+        self._level[ident] = level
+        return ident
+
+    def _new_goal(self, ident: Identifier, superstate: Goal | None) -> Goal:
+        """Create a state's standard augmentations (type, superstate, reward-link, epmem, smem)."""
+        goal = Goal(ident, superstate, Slot(ident, "operator", True))
+        self._goals[ident] = goal
+        self._slots.setdefault(ident, {})[_vkey("operator")] = goal.op_slot
+        level = goal.level
+        goal.arch_wmes.append(self._add_arch(ident, "type", "state"))
+        goal.arch_wmes.append(
+            self._add_arch(ident, "superstate", superstate.id if superstate else "nil")
+        )
+        reward = self._new_id("R", level)
+        goal.arch_wmes.append(self._add_arch(ident, "reward-link", reward))
+        epmem = self._new_id("E", level)
+        command, result = self._new_id("C", level), self._new_id("R", level)
+        goal.arch_wmes.append(self._add_arch(ident, "epmem", epmem))
+        goal.arch_wmes.append(self._add_arch(epmem, "command", command))
+        goal.arch_wmes.append(self._add_arch(epmem, "result", result))
+        goal.arch_wmes.append(self._add_arch(epmem, "present-id", 1))
+        smem = self._new_id("L", level)
+        command, result = self._new_id("C", level), self._new_id("R", level)
+        goal.arch_wmes.append(self._add_arch(ident, "smem", smem))
+        goal.arch_wmes.append(self._add_arch(smem, "command", command))
+        goal.arch_wmes.append(self._add_arch(smem, "result", result))
+        return goal
+
+    # ------------------------------------------------------------- WM primitives
+
+    def _add_wme(self, ident: Identifier, attr: Symbol, value: Symbol, acceptable=False) -> WME:
+        self._timetag += 1
+        wme = WME(ident, attr, value, self._timetag, acceptable)
+        self._wm[wme.timetag] = wme
+        self.matcher.add_wme(wme)
+        self._wme_adds += 1
+        if len(self._wm) > self._wm_max:
+            self._wm_max = len(self._wm)
+        if self.trace_level >= 4:
+            self._emit("\n=>WM: " + trace_wme(wme))
+        return wme
+
+    def _remove_wme(self, wme: WME) -> None:
+        if self._wm.pop(wme.timetag, None) is None:
+            return
+        self.matcher.remove_wme(wme)
+        self._wme_removes += 1
+        if self.trace_level >= 4:
+            self._emit("\n<=WM: " + trace_wme(wme))
+        dependents = self._dependents.pop(wme, None)
+        if dependents:
+            for inst in dependents:
+                self._schedule_retraction(inst)
+        goals = self._gds_index.pop(wme, None)
+        if goals:
+            for goal in goals:
+                if goal.alive:
+                    if self.trace_level >= 2:
+                        self._emit(f"\nRemoving state {goal.id} because element in GDS changed.")
+                    self._remove_goal(goal)
+
+    def _add_arch(self, ident: Identifier, attr: Symbol, value: Symbol) -> WME:
+        wme = self._add_wme(ident, attr, value)
+        self._arch.setdefault(ident, []).append(wme)
+        return wme
+
+    def _remove_arch(self, wme: WME) -> None:
+        bucket = self._arch.get(wme.id)
+        if bucket is not None:
+            try:
+                bucket.remove(wme)
+            except ValueError:
+                pass
+            if not bucket:
+                del self._arch[wme.id]
+        self._remove_wme(wme)
+
+    def _level_of(self, ident: Identifier) -> int:
+        level = ident.level
+        return level if level is not None else self._level.get(ident, 1)
+
+    def _augmentations(self, ident: Identifier) -> list[WME]:
+        """Every WME whose identifier is ``ident`` (for print)."""
+        out = list(self._arch.get(ident, ()))
+        for slot in self._slots.get(ident, {}).values():
+            out.extend(slot.wmes.values())
+            out.extend(slot.acceptable_wmes.values())
+        return out
+
+    # ------------------------------------------------------------- the cycle
+
+    def _run_phase(self) -> None:
+        phase = self._phase
+        if phase == "input":
+            self._input_phase()
+        elif phase == "propose":
+            self._elaboration_phase(apply=False)
+        elif phase == "decide":
+            self._decision_phase()
+        elif phase == "apply":
+            self._elaboration_phase(apply=True)
+        else:
+            self._output_phase()
+
+    def _input_phase(self) -> None:
+        if self.trace_level >= 2:
+            self._emit("\n--- Input Phase --- \n")
+        self._apply_input_ops()
+        self._collect_changes()
+        if self.trace_level >= 2:
+            self._emit("\n--- END Input Phase --- \n")
+        self._phase = "propose"
+        self._active = None
+        self._active_type = ""
+        self._phase_cycles = 0
+        if self.trace_level >= 2:
+            self._emit("\n--- Propose Phase ---\n")
+
+    def _output_phase(self) -> None:
+        if self.trace_level >= 2:
+            self._emit("\n--- Output Phase ---\n\n--- END Output Phase ---\n")
+        self._phase = "input"
+
+    def _elaboration_phase(self, apply: bool) -> None:
+        """Run one elaboration cycle of the phase, or end the phase at quiescence."""
+        end = "output" if apply else "decide"
+        if self._phase_cycles == 0 and apply and self.trace_level >= 2 and self._active is None:
+            self._emit("\n--- Application Phase ---\n")
+        goal, firing = self._next_active(apply)
+        if firing == "":
+            self._end_phase(apply, end)
+            return
+        self._elaboration_cycle(goal, firing)
+        self._e_cycles += 1
+        self._phase_cycles += 1
+        if firing == "PE":
+            self._pe_cycles += 1
+        if self._phase_cycles >= self.max_elaborations and not self._halted:
+            self._emit(
+                f"\nWarning: reached max-elaborations; proceeding to {end} phase."
+            )
+            self._end_phase(apply, end)
+
+    def _end_phase(self, apply: bool, end: str) -> None:
+        if self.trace_level >= 2:
+            self._emit(
+                "\n--- END Application Phase ---\n" if apply else "\n--- END Propose Phase ---\n"
+            )
+        self._phase = end
+        self._active = None
+        self._active_type = ""
+        self._phase_cycles = 0
+
+    def _next_active(self, apply: bool) -> tuple[Goal | None, str]:
+        """The goal and firing type of the next elaboration cycle, '' at quiescence.
+
+        Checks the goal stack's consistency like the kernel when the active level moves or
+        a goal switches from i- to o-firing; an inconsistent decision ends the phase.
+        """
+        if self._nil_retractions:
+            return None, "NIL"
+        goal: Goal | None = self._top
+        chosen: Goal | None = None
+        firing = ""
+        while goal is not None:
+            if goal.pending_i or goal.retractions:
+                chosen, firing = goal, "IE"
+                break
+            if apply and goal.pending_o:
+                chosen, firing = goal, "PE"
+                break
+            goal = goal.sub
+        if chosen is None:
+            return None, ""
+        previous, previous_type = self._active, self._active_type
+        check: Goal | None = None
+        if previous is not None and previous.alive:
+            if chosen.level != previous.level:
+                check = chosen if chosen.level < previous.level else previous
+            elif firing == "PE" and previous_type != "PE":
+                check = chosen
+        elif previous is not None and not previous.alive and firing == "PE":
+            check = chosen
+        if check is not None and not self._consistent_through(check):
+            return None, ""
+        self._active, self._active_type = chosen, firing
+        return chosen, firing
+
+    def _elaboration_cycle(self, goal: Goal | None, firing: str) -> None:
+        if self.trace_level >= 2:
+            if goal is None:
+                self._emit("\n--- Inner Elaboration Phase, active level 0 goal # ---\n")
+            else:
+                if self._phase == "apply":
+                    self._emit(
+                        f"\t--- Firing Productions ({firing}) For State At Depth {goal.level} ---\n"
+                    )
+                self._emit(
+                    f"\n--- Inner Elaboration Phase, active level {goal.level} goal {goal.id} ---\n"
+                )
+        fired: list[Instantiation] = []
+        if goal is None:
+            retractions, self._nil_retractions = self._nil_retractions, []
+        else:
+            queue = goal.pending_i if firing == "IE" else goal.pending_o
+            if queue:
+                matches = list(queue.items())
+                queue.clear()
+                for match, info in reversed(matches):
+                    self._pending_goal.pop(match, None)
+                    inst = self._fire(match, info, goal)
+                    if inst is not None:
+                        fired.append(inst)
+            retractions, goal.retractions = goal.retractions, []
+        for inst in retractions:
+            self._retract(inst)
+        self._assert_preferences(fired)
+        if self.trace_level >= 2 and goal is not None and self._phase == "apply":
+            self._emit(f"\t--- Change Working Memory ({firing}) ---\n")
+        self._working_memory_phase()
+        self._collect_changes()
+
+    def _decision_phase(self) -> None:
+        if self.trace_level >= 2:
+            self._emit("\n--- Decision Phase ---\n")
+        self._collect_changes()
+        self._decide_context_slots()
+        self._decisions += 1
+        self._collect_changes()
+        if self.trace_level >= 2:
+            self._emit("\n--- END Decision Phase ---\n")
+        self._phase = "apply"
+        self._active = None
+        self._active_type = ""
+        self._phase_cycles = 0
+
+    # ------------------------------------------------------------- matches
+
+    def _collect_changes(self) -> None:
+        """Move the matcher's new and retracted matches into the goals' queues."""
+        new, gone = self.matcher.take_changes()
+        for match in gone:
+            inst = self._inst_of.pop(match, None)
+            if inst is None:
+                goal = self._pending_goal.pop(match, None)
+                if goal is not None:
+                    goal.pending_i.pop(match, None)
+                    goal.pending_o.pop(match, None)
+                continue
+            self._schedule_retraction(inst)
+        for match in new:
+            wmes = match.wmes
+            ident = match_goal(wmes)
+            goal = self._goals.get(ident) if ident is not None else None
+            if goal is None or not goal.alive:
+                continue
+            info = self._productions.get(match.production.name)
+            if info is None:
+                continue
+            if is_o_supported(info, wmes, goal.id):
+                goal.pending_o[match] = info
+            else:
+                goal.pending_i[match] = info
+            self._pending_goal[match] = goal
+
+    def _schedule_retraction(self, inst: Instantiation) -> None:
+        if inst.retracted:
+            return
+        inst.retracted = True
+        if inst.goal.alive:
+            inst.goal.retractions.append(inst)
+        else:
+            self._nil_retractions.append(inst)
+
+    # ------------------------------------------------------------- firing
+
+    def _fire(self, match: object, info: ProductionInfo, goal: Goal) -> Instantiation | None:
+        wmes = match.wmes  # type: ignore[attr-defined]
+        name = info.production.name
+        o_support = is_o_supported(info, wmes, goal.id)
+        inst = Instantiation(name, match, goal, wmes, o_support)
+        self._firings += 1
+        info.firings += 1
+        if self.trace_level >= 3:
+            self._emit(f"\nFiring {name}")
+        self._inst_of[match] = inst
+        bindings = dict(match.bindings)  # type: ignore[attr-defined]
+        operators = tested_operators(info, wmes, goal.id) if o_support else []
+        declared_o = info.declared == "o-support"
+        for action in info.actions:
+            try:
+                if isinstance(action, MakeAction):
+                    pref = self._make_preference(action, bindings, inst)
+                    if pref is None:
+                        continue
+                    if o_support and (declared_o or not any(pref.id is o for o in operators)):
+                        pref.o_supported = True
+                    inst.prefs.append(pref)
+                else:
+                    self._call(action.call, bindings, inst)
+            except SoarError as error:
+                raise SoarRuntimeError(f"production {name}: {error}") from error
+        if goal.level > 1:
+            goal.insts.add(inst)
+            self._handle_substate_preferences(inst)
+        return inst
+
+    def _value(self, value: object, bindings: dict[str, Symbol], inst: Instantiation) -> Symbol:
+        if isinstance(value, Var):
+            bound = bindings.get(value.name)
+            if bound is None:
+                bound = self._new_id(value.name, inst.goal.level)
+                bindings[value.name] = bound
+            return bound
+        if isinstance(value, Const):
+            return value.value
+        if isinstance(value, FuncCall):
+            result = self._call(value, bindings, inst)
+            if result is None:
+                raise SoarRuntimeError(f"({value.name}) returns no value")
+            return result
+        raise SoarRuntimeError(f"cannot evaluate {value!r}")
+
+    def _call(
+        self, call: FuncCall, bindings: dict[str, Symbol], inst: Instantiation
+    ) -> Symbol | None:
+        function = FUNCTIONS.get(call.name)
+        if function is None:
+            raise SoarRuntimeError(f"unknown RHS function ({call.name})")
+        args = [self._value(arg, bindings, inst) for arg in call.args]
+        return function(self, args)
+
+    def _make_preference(
+        self, action: MakeAction, bindings: dict[str, Symbol], inst: Instantiation
+    ) -> Preference | None:
+        ident = self._value(action.id, bindings, inst)
+        attr = self._value(action.attr, bindings, inst)
+        value = self._value(action.value, bindings, inst)
+        referent = None
+        if action.referent is not None:
+            referent = self._value(action.referent, bindings, inst)
+        if not isinstance(ident, Identifier):
+            self._emit(
+                f"\nError: production {inst.name} makes a preference for a non-identifier"
+                f" {format_value(ident)}; action ignored."
+            )
+            return None
+        ptype = preference_type(action.preference, referent)
+        return Preference(ptype, ident, attr, value, referent, inst)
+
+    def _retract(self, inst: Instantiation) -> None:
+        removed = False
+        for pref in inst.prefs:
+            if pref.live and not pref.o_supported:
+                if not removed and self.trace_level >= 3:
+                    self._emit(f"\nRetracting {inst.name}")
+                removed = True
+                if self.trace_level >= 5:
+                    self._emit("\n -" + trace_preference(pref))
+                self._remove_preference(pref)
+        if inst.goal.level > 1 and not any(p.live for p in inst.prefs):
+            inst.goal.insts.discard(inst)
+        if inst.is_justification:
+            for wme in inst.grounds:
+                bucket = self._dependents.get(wme)
+                if bucket is not None and inst in bucket:
+                    bucket.remove(inst)
+
+    def _assert_preferences(self, fired: list[Instantiation]) -> None:
+        """Add new preferences to their slots in the kernel's order; o-rejects remove."""
+        for inst in reversed(fired):
+            for pref in reversed(inst.prefs):
+                if self.trace_level >= 5:
+                    self._emit("\n+" + trace_preference(pref))
+                if pref.o_supported and pref.type == REJECT:
+                    self._o_reject(pref)
+                    continue
+                self._add_preference(pref)
+
+    def _slot(self, ident: Identifier, attr: Symbol, create: bool = True) -> Slot | None:
+        slots = self._slots.get(ident)
+        if slots is None:
+            if not create:
+                return None
+            slots = self._slots[ident] = {}
+        key = _vkey(attr)
+        slot = slots.get(key)
+        if slot is None and create:
+            slot = slots[key] = Slot(ident, attr, False)
+        return slot
+
+    def _add_preference(self, pref: Preference) -> None:
+        slot = self._slot(pref.id, pref.attr)
+        assert slot is not None
+        slot.add(pref)
+        self._mark_changed(slot)
+
+    def _remove_preference(self, pref: Preference) -> None:
+        slot = pref.slot
+        if slot is None or not pref.live:
+            return
+        slot.remove(pref)
+        self._mark_changed(slot)
+
+    def _mark_changed(self, slot: Slot) -> None:
+        if not slot.changed:
+            slot.changed = True
+            (self._changed_context if slot.is_context else self._changed).append(slot)
+
+    def _o_reject(self, reject: Preference) -> None:
+        slot = self._slot(reject.id, reject.attr, create=False)
+        if slot is None:
+            return
+        key = _vkey(reject.value)
+        for pref in slot.all_preferences():
+            if _vkey(pref.value) == key and (
+                not isinstance(key, Identifier) or pref.value is reject.value
+            ):
+                if self.trace_level >= 5:
+                    self._emit("\n-" + trace_preference(pref))
+                self._remove_preference(pref)
+
+    # ------------------------------------------------------------- WM phase
+
+    def _working_memory_phase(self) -> None:
+        """Turn changed slots into WME changes, in the kernel's timetag order."""
+        while self._changed or self._changed_context:
+            changed, self._changed = self._changed, []
+            adds: list[tuple[Slot, Symbol]] = []
+            removes: list[WME] = []
+            for slot in reversed(changed):
+                slot.changed = False
+                self._diff_slot(slot, adds, removes)
+            for slot, value in adds:
+                slot.wmes[_vkey(value)] = self._add_wme(slot.id, slot.attr, value)
+            context, self._changed_context = self._changed_context, []
+            for slot in reversed(context):
+                slot.changed = False
+                self._update_acceptable_wmes(slot)
+            for wme in removes:
+                self._remove_wme(wme)
+            for slot in changed:
+                self._collect_garbage(slot)
+            for slot in context:
+                self._collect_garbage(slot)
+
+    def _diff_slot(self, slot: Slot, adds: list, removes: list[WME]) -> None:
+        _, candidates = dec.run_preference_semantics(slot, None)
+        wanted = {_vkey(v): v for v in candidates}
+        for key, wme in list(slot.wmes.items()):
+            if key not in wanted:
+                del slot.wmes[key]
+                removes.append(wme)
+        for key, value in wanted.items():
+            if key not in slot.wmes:
+                slot.wmes[key] = None  # type: ignore[assignment]
+                adds.append((slot, value))
+
+    def _update_acceptable_wmes(self, slot: Slot) -> None:
+        wanted: dict[object, Symbol] = {}
+        for ptype in (REQUIRE, ACCEPTABLE):
+            for pref in slot.of_type(ptype):
+                wanted.setdefault(_vkey(pref.value), pref.value)
+        for key, wme in list(slot.acceptable_wmes.items()):
+            if key not in wanted:
+                del slot.acceptable_wmes[key]
+                self._operator_proposal_gone(slot, wme)
+                self._remove_wme(wme)
+        for key, value in wanted.items():
+            if key not in slot.acceptable_wmes:
+                slot.acceptable_wmes[key] = self._add_wme(slot.id, "operator", value, True)
+
+    def _operator_proposal_gone(self, slot: Slot, wme: WME) -> None:
+        """Soar 9.6: a selected operator whose proposal no longer matches is removed."""
+        selected = slot.wmes.get(_vkey(wme.value))
+        if selected is None:
+            return
+        if self.trace_level >= 2:
+            self._emit(
+                "\n        REMOVING: Operator from context slot (proposal no longer matches): "
+                + trace_wme(wme)
+            )
+        goal = self._goals[slot.id]
+        if goal.sub is not None:
+            if self.trace_level >= 2:
+                self._emit(f"\nRemoving state {goal.sub.id} because of an operator removal.")
+            self._remove_goal(goal.sub)
+        del slot.wmes[_vkey(wme.value)]
+        self._remove_wme(selected)
+
+    def _collect_garbage(self, slot: Slot) -> None:
+        if slot.is_empty() and not slot.is_context:
+            slots = self._slots.get(slot.id)
+            if slots is not None and slots.get(_vkey(slot.attr)) is slot:
+                del slots[_vkey(slot.attr)]
+                if not slots:
+                    del self._slots[slot.id]
+
+    # ------------------------------------------------------------- decisions
+
+    def _decide_context_slots(self) -> None:
+        goal: Goal | None = self._top
+        while goal is not None:
+            slot = goal.op_slot
+            decidable = not slot.wmes and bool(slot.prefs)
+            if decidable or goal.sub is None:
+                if self._decide_slot(goal, decidable):
+                    return
+            goal = goal.sub
+
+    def _decide_slot(self, goal: Goal, decidable: bool) -> bool:
+        slot = goal.op_slot
+        if not decidable:
+            impasse, candidates = dec.NO_CHANGE, []
+        else:
+            impasse, candidates = dec.run_preference_semantics(slot, self.exploration)
+            if impasse == dec.NONE:
+                if candidates:
+                    self._select(goal, candidates[0])
+                    return True
+                impasse = dec.NO_CHANGE
+        attribute = "operator" if slot.wmes else "state"
+        sub = goal.sub
+        if sub is not None and sub.impasse == impasse and sub.attribute == attribute:
+            self._update_items(sub, candidates, slot)
+            return False
+        if sub is not None:
+            self._remove_goal(sub)
+        self._create_substate(goal, impasse, attribute, candidates, slot)
+        return True
+
+    def _select(self, goal: Goal, value: Symbol) -> None:
+        if goal.sub is not None:
+            self._remove_goal(goal.sub)
+        slot = goal.op_slot
+        slot.wmes[_vkey(value)] = self._add_wme(goal.id, "operator", value)
+        name = self._operator_name(value)
+        self._operator_names.append(name if name is not None else "?")
+        if self.trace_level >= 1:
+            indent = " " + "   " * goal.level
+            label = f" ({format_value(name)})" if name is not None else ""
+            self._emit(f"\n{self._decisions + 1:>6}:{indent}O: {format_value(value)}{label}")
+
+    def _operator_name(self, value: Symbol) -> Symbol | None:
+        if not isinstance(value, Identifier):
+            return None
+        slot = self._slot(value, "name", create=False)
+        if slot is not None:
+            for wme in slot.wmes.values():
+                return wme.value
+        for wme in self._arch.get(value, ()):
+            if wme.attr == "name":
+                return wme.value
+        return None
+
+    def _create_substate(
+        self, goal: Goal, impasse: str, attribute: str, candidates: list[Symbol], slot: Slot
+    ) -> None:
+        ident = self._ids.new("S", level=goal.level + 1)
+        sub = self._new_goal(ident, goal)
+        sub.impasse, sub.attribute = impasse, attribute
+        goal.sub = sub
+        choices = {dec.NO_CHANGE: "none", dec.CONSTRAINT_FAILURE: "constraint-failure"}
+        sub.arch_wmes.append(self._add_arch(ident, "attribute", attribute))
+        sub.arch_wmes.append(self._add_arch(ident, "impasse", impasse))
+        sub.arch_wmes.append(self._add_arch(ident, "choices", choices.get(impasse, "multiple")))
+        sub.arch_wmes.append(self._add_arch(ident, "quiescence", "t"))
+        self._update_items(sub, candidates, slot)
+        if self.trace_level >= 1:
+            indent = " " + "   " * goal.level
+            kind = (
+                f"{attribute} {impasse}" if impasse != dec.NO_CHANGE else f"{attribute} no-change"
+            )
+            self._emit(f"\n{self._decisions + 1:>6}:{indent}==>S: {ident} ({kind})")
+
+    def _update_items(self, sub: Goal, candidates: list[Symbol], slot: Slot) -> None:
+        """Make the substate's ``^item``/``^non-numeric`` WMEs and counts match the candidates."""
+        if sub.impasse == dec.NO_CHANGE:
+            return
+        numeric = {dec._key(p.value) for p in slot.of_type("n=")}
+        self._sync_items(sub, "item", candidates)
+        self._sync_items(sub, "non-numeric", [c for c in candidates if dec._key(c) not in numeric])
+
+    def _sync_items(self, sub: Goal, attr: str, values: list[Symbol]) -> None:
+        wanted = {(attr, dec._key(v)): v for v in values}
+        for key, wme in list(sub.items.items()):
+            if key[0] == attr and key not in wanted:
+                del sub.items[key]
+                self._remove_arch(wme)
+        changed = False
+        for key, value in wanted.items():
+            if key not in sub.items:
+                sub.items[key] = self._add_arch(sub.id, attr, value)
+                changed = True
+        count_attr = f"{attr}-count"
+        old = sub.counts.get(count_attr)
+        if old is not None and old.value == len(values) and not changed:
+            return
+        if old is not None and old.value == len(values):
+            return
+        if old is not None:
+            self._remove_arch(old)
+        sub.counts[count_attr] = self._add_arch(sub.id, count_attr, len(values))
+
+    def _remove_goal(self, goal: Goal) -> None:
+        """Remove a substate and everything below it (``remove_existing_context...``)."""
+        if not goal.alive:
+            return
+        if goal.sub is not None:
+            self._remove_goal(goal.sub)
+        goal.alive = False
+        selected = goal.selected()
+        if selected is not None:
+            goal.op_slot.wmes.clear()
+            self._remove_wme(selected)
+        for inst in list(goal.insts):
+            for pref in inst.prefs:
+                if pref.live:
+                    if self.trace_level >= 5:
+                        self._emit("\n-" + trace_preference(pref))
+                    self._remove_preference(pref)
+        goal.insts.clear()
+        for wme in list(goal.items.values()) + list(goal.counts.values()) + goal.arch_wmes:
+            self._remove_arch(wme)
+        goal.items.clear()
+        goal.counts.clear()
+        for match in list(goal.pending_i) + list(goal.pending_o):
+            self._pending_goal.pop(match, None)
+        goal.pending_i.clear()
+        goal.pending_o.clear()
+        self._nil_retractions.extend(goal.retractions)
+        goal.retractions = []
+        for wme in goal.gds:
+            bucket = self._gds_index.get(wme)
+            if bucket is not None:
+                bucket.discard(goal)
+                if not bucket:
+                    del self._gds_index[wme]
+        goal.gds.clear()
+        if goal.superstate is not None and goal.superstate.sub is goal:
+            goal.superstate.sub = None
+        del self._goals[goal.id]
+        self._working_memory_phase()
+        self._slots.pop(goal.id, None)
+
+    def _consistent_through(self, limit: Goal) -> bool:
+        goal: Goal | None = self._top
+        while goal is not None:
+            if not self._decision_consistent(goal):
+                if self.trace_level >= 2:
+                    self._emit(
+                        f"\nRemoving substates of {goal.id} because the operator last selected"
+                        f" in {goal.id} is not\nconsistent with the current preferences."
+                    )
+                self._remove_current_decision(goal)
+                return False
+            if goal is limit:
+                break
+            goal = goal.sub
+        return True
+
+    def _decision_consistent(self, goal: Goal) -> bool:
+        slot = goal.op_slot
+        impasse, candidates = dec.run_preference_semantics(slot, None, consistency=True)
+        selected = goal.selected()
+        if selected is not None:
+            key = dec._key(selected.value)
+            return impasse == dec.NONE and any(dec._key(c) == key for c in candidates)
+        sub = goal.sub
+        if sub is not None and sub.impasse != dec.NO_CHANGE:
+            return impasse == sub.impasse
+        return impasse == dec.NONE and not candidates
+
+    def _remove_current_decision(self, goal: Goal) -> None:
+        if goal.sub is not None:
+            self._remove_goal(goal.sub)
+        selected = goal.selected()
+        if selected is not None:
+            goal.op_slot.wmes.clear()
+            self._remove_wme(selected)
+        self._collect_changes()
+
+    # ------------------------------------------------------------- results, GDS
+
+    def _handle_substate_preferences(self, inst: Instantiation) -> None:
+        """Results (preferences on superstate structure) get a justification; o-supported
+        local preferences extend the goal dependency set."""
+        goal = inst.goal
+        level = goal.level
+        results = self._find_results(inst, level)
+        if results:
+            self._justify(inst, results)
+        if any(p.o_supported and p not in results for p in inst.prefs):
+            for wme in self._backtrace(inst, level, through_o_support=False):
+                if wme not in goal.gds:
+                    goal.gds.add(wme)
+                    self._gds_index.setdefault(wme, set()).add(goal)
+
+    def _find_results(self, inst: Instantiation, level: int) -> list[Preference]:
+        results: list[Preference] = []
+        marked: set[int] = set()
+        frontier: list[Identifier] = []
+        for pref in inst.prefs:
+            if self._level_of(pref.id) < level:
+                results.append(pref)
+                marked.add(id(pref))
+                frontier.extend(self._ids_in(pref, self._level_of(pref.id)))
+        while frontier:
+            ident = frontier.pop()
+            for pref in inst.prefs:
+                if id(pref) not in marked and pref.id is ident:
+                    results.append(pref)
+                    marked.add(id(pref))
+                    frontier.extend(self._ids_in(pref, self._level_of(pref.id)))
+        return results
+
+    def _ids_in(self, pref: Preference, level: int) -> list[Identifier]:
+        """Identifiers a result links to; they are promoted to the result's level."""
+        out = []
+        for sym in (pref.value, pref.referent):
+            if isinstance(sym, Identifier) and sym.level is None:
+                if self._level_of(sym) > level:
+                    self._level[sym] = level
+                    out.append(sym)
+        return out
+
+    def _justify(self, inst: Instantiation, results: list[Preference]) -> None:
+        self._justifications += 1
+        grounds = tuple(self._backtrace(inst, inst.goal.level, through_o_support=True))
+        home = self._goal_of_grounds(grounds, results)
+        just = Instantiation(f"justify{self._justifications}", None, home, (), inst.o_support, True)
+        just.grounds = grounds
+        for pref in results:
+            copy = Preference(pref.type, pref.id, pref.attr, pref.value, pref.referent, just)
+            copy.o_supported = pref.o_supported
+            just.prefs.append(copy)
+        inst.prefs.extend(just.prefs)
+        if not just.o_support:
+            for wme in grounds:
+                self._dependents.setdefault(wme, []).append(just)
+        if home.level > 1:
+            home.insts.add(just)
+
+    def _goal_of_grounds(self, grounds: tuple[WME, ...], results: list[Preference]) -> Goal:
+        best = self._top
+        for wme in grounds:
+            goal = self._goals.get(wme.id)
+            if goal is not None and goal.level > best.level:
+                best = goal
+        for pref in results:
+            level = self._level_of(pref.id)
+            while best.level > level and best.superstate is not None:
+                best = best.superstate
+        return best
+
+    def _backtrace(self, inst: Instantiation, level: int, through_o_support: bool) -> list[WME]:
+        """Superstate WMEs (identifier above ``level``) that ``inst`` depends on, found by
+        walking back through the instantiations that made its local WMEs."""
+        grounds: dict[int, WME] = {}
+        seen: set[int] = {id(inst)}
+        stack = [inst]
+        while stack:
+            current = stack.pop()
+            for wme in current.wmes:
+                if wme is None:
+                    continue
+                if self._level_of(wme.id) < level:
+                    grounds.setdefault(wme.timetag, wme)
+                    continue
+                for source in self._supporting_instantiations(wme):
+                    if id(source) in seen:
+                        continue
+                    if not through_o_support and any(
+                        p.o_supported and p.live for p in source.prefs
+                    ):
+                        continue
+                    seen.add(id(source))
+                    stack.append(source)
+        return list(grounds.values())
+
+    def _supporting_instantiations(self, wme: WME) -> list[Instantiation]:
+        slot = self._slot(wme.id, wme.attr, create=False)
+        if slot is None:
+            return []
+        key = _vkey(wme.value)
+        types = (ACCEPTABLE, REQUIRE) if wme.acceptable or not slot.is_context else ()
+        for ptype in types:
+            for pref in slot.of_type(ptype):
+                if _vkey(pref.value) == key and not pref.inst.is_justification:
+                    return [pref.inst]
+        return []
+
+    # ------------------------------------------------------------- input
+
+    def _apply_input_ops(self) -> None:
+        ops, self._input_ops = self._input_ops, []
+        for op in ops:
+            if op[0] == "add":
+                _, handle, ident, attr, value = op
+                if handle.removed:
+                    continue
+                wme = self._add_wme(ident, attr, value)
+                self._arch.setdefault(ident, []).append(wme)
+                handle.wme = wme
+            else:
+                _, handle = op
+                if handle.wme is not None:
+                    self._remove_arch(handle.wme)
+                    handle.wme = None
+
+    def _queue_input(self, op: tuple) -> None:
+        self._input_ops.append(op)
+
+    # ------------------------------------------------------------- output text
+
+    def _emit(self, text: str) -> None:
+        stream = self.out if self.out is not None else sys.stdout
+        stream.write(text)
+
+    def __repr__(self) -> str:
+        return f"<Agent {self.name}: {len(self._productions)} productions, {len(self._wm)} wmes>"
+
+
+def load_agent(paths: Iterable[str], **kwargs: object) -> Agent:
+    """An agent with the given rule files sourced, in order."""
+    agent = Agent(**kwargs)  # type: ignore[arg-type]
+    for path in paths:
+        agent.source(path)
+    return agent
+
+
+__all__ = ["Agent", "PHASES", "load_agent"]

@@ -1,0 +1,136 @@
+"""Instantiations (fired rules) and what the engine precomputes about each production.
+
+An instantiation is one match of a production that fired; it owns the preferences its
+actions made. Its *match goal* is the deepest state among the identifiers of the WMEs it
+matched (the kernel's ``find_goal_for_match_set_change_assertion``); support is Soar 9's:
+o-support when the match tests the selected operator of the match goal (a positive,
+non-acceptable ``^operator`` condition on that state) and the action is not on that
+operator; ``:o-support``/``:i-support`` override it. A *justification* stands in for a
+substate rule that returned results: it holds copies of the result preferences and, when
+i-supported, is retracted as soon as one of the superstate WMEs they depended on leaves
+working memory.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from .memory import WME, Identifier
+from .production import CallAction, Const, FuncCall, MakeAction, Production, RhsValue, Var
+
+if TYPE_CHECKING:
+    from .goals import Goal
+    from .preferences import Preference
+
+
+@dataclass
+class ProductionInfo:
+    """Facts about a production that the per-match path needs, computed once at load."""
+
+    production: Production
+    #: Indexes of positive, non-acceptable conditions whose attribute is the constant
+    #: ``operator``: the conditions that can make the rule o-supported.
+    operator_conditions: tuple[int, ...]
+    declared: str | None
+    #: Variables naming the tested operators (``<o>`` in ``^operator <o>``), if simple.
+    actions: tuple[MakeAction | CallAction, ...]
+    firings: int = 0
+
+    @classmethod
+    def of(cls, production: Production) -> ProductionInfo:
+        indexes = []
+        for index, cond in enumerate(production.conditions):
+            attr = getattr(cond, "attr_test", None)
+            if (
+                isinstance(attr, Const)
+                and attr.value == "operator"
+                and not cond.negated  # type: ignore[union-attr]
+                and not cond.acceptable  # type: ignore[union-attr]
+            ):
+                indexes.append(index)
+        return cls(production, tuple(indexes), production.support, production.actions)
+
+
+class Instantiation:
+    """A fired match (or a justification) and the preferences it asserted."""
+
+    __slots__ = (
+        "name",
+        "match",
+        "goal",
+        "wmes",
+        "prefs",
+        "o_support",
+        "is_justification",
+        "grounds",
+        "retracted",
+    )
+
+    def __init__(
+        self,
+        name: str,
+        match: object | None,
+        goal: Goal,
+        wmes: tuple[WME | None, ...],
+        o_support: bool,
+        is_justification: bool = False,
+    ) -> None:
+        self.name = name
+        self.match = match
+        self.goal = goal
+        self.wmes = wmes
+        self.prefs: list[Preference] = []
+        self.o_support = o_support
+        self.is_justification = is_justification
+        self.grounds: tuple[WME, ...] = ()
+        self.retracted = False
+
+    def __repr__(self) -> str:
+        return f"<Instantiation {self.name} at {self.goal.id}>"
+
+
+def match_goal(wmes: tuple[WME | None, ...]) -> Identifier | None:
+    """The deepest state among the identifiers of the matched WMEs."""
+    best: Identifier | None = None
+    for wme in wmes:
+        if wme is not None:
+            ident = wme.id
+            level = ident.level
+            if level is not None and (best is None or level > best.level):  # type: ignore[operator]
+                best = ident
+    return best
+
+
+def is_o_supported(info: ProductionInfo, wmes: tuple[WME | None, ...], goal: Identifier) -> bool:
+    """Whether any action of this match gets o-support (decides IE vs PE firing)."""
+    if info.declared is not None:
+        return info.declared == "o-support"
+    for index in info.operator_conditions:
+        wme = wmes[index]
+        if wme is not None and wme.id is goal:
+            return True
+    return False
+
+
+def tested_operators(
+    info: ProductionInfo, wmes: tuple[WME | None, ...], goal: Identifier
+) -> list[object]:
+    """Values of the selected-operator WMEs of the match goal that the match tested."""
+    return [
+        wmes[i].value  # type: ignore[union-attr]
+        for i in info.operator_conditions
+        if wmes[i] is not None and wmes[i].id is goal  # type: ignore[union-attr]
+    ]
+
+
+def variables_in(value: RhsValue) -> list[str]:
+    """Variable names used in an RHS value (for error messages and checks)."""
+    if isinstance(value, Var):
+        return [value.name]
+    if isinstance(value, FuncCall):
+        out: list[str] = []
+        for arg in value.args:
+            out.extend(variables_in(arg))
+        return out
+    return []

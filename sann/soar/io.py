@@ -1,0 +1,158 @@
+"""Input-link and output-link handles.
+
+Input changes are buffered and applied in the next input phase, as the kernel applies
+SML changes; identifiers are named at once so that handles can be linked before a run.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Union
+
+from .errors import SoarRuntimeError
+from .memory import WME, Identifier, Symbol
+
+if TYPE_CHECKING:
+    from .agent import Agent
+
+_MISSING = object()
+
+InputValue = Union[str, int, float, "InputHandle"]
+
+
+class WMEHandle:
+    """One input WME ``(id ^attr value)``; ``remove()`` takes it out at the next input phase."""
+
+    def __init__(self, agent: Agent, ident: Identifier, attr: str, value: Symbol) -> None:
+        self._agent = agent
+        self.id = ident
+        self.attr = attr
+        self.value = value
+        self.wme: WME | None = None
+        self.removed = False
+
+    def remove(self) -> None:
+        if self.removed:
+            return
+        self.removed = True
+        self._agent._queue_input(("remove", self))
+
+    def __repr__(self) -> str:
+        return f"<input ({self.id} ^{self.attr} {self.value})>"
+
+
+class InputHandle:
+    """An identifier on the input side: the input-link itself or one made under it."""
+
+    def __init__(self, agent: Agent, ident: Identifier, link: WMEHandle | None) -> None:
+        self._agent = agent
+        self.identifier = ident
+        self._link = link
+        self._children: list[WMEHandle] = []
+        self._sub: dict[int, InputHandle] = {}
+
+    @property
+    def id(self) -> str:
+        return self.identifier.name
+
+    def add(self, attr: str, value: object = _MISSING) -> InputHandle | WMEHandle:
+        """``add("block")`` makes a new identifier and returns its handle; ``add("id", 3)``
+        a constant and ``add("on", handle)`` a link, returning the WME handle."""
+        self._check_live()
+        if not isinstance(attr, str) or not attr:
+            raise SoarRuntimeError(f"input attribute must be a non-empty string, got {attr!r}")
+        if value is _MISSING:
+            ident = self._agent._new_id(attr, 1)
+            link = self._queue(attr, ident)
+            child = InputHandle(self._agent, ident, link)
+            self._sub[id(link)] = child
+            return child
+        if isinstance(value, InputHandle):
+            return self._queue(attr, value.identifier)
+        if isinstance(value, bool) or not isinstance(value, str | int | float):
+            raise SoarRuntimeError(
+                f"input value must be a string, int, float or handle, got {value!r}"
+            )
+        return self._queue(attr, value)
+
+    def update(self, attr: str, value: object) -> WMEHandle | InputHandle:
+        """Replace every value of ``attr`` made through this handle by ``value``."""
+        for child in list(self._children):
+            if child.attr == attr and not child.removed:
+                if (
+                    not isinstance(value, InputHandle)
+                    and child.value == value
+                    and type(child.value) is type(value)
+                ):
+                    return child
+                self._remove_child(child)
+        return self.add(attr, value)
+
+    def remove(self) -> None:
+        """Remove this identifier's link and everything made under it."""
+        if self._link is None:
+            raise SoarRuntimeError("the input-link itself cannot be removed")
+        self._link.remove()
+        self._clear()
+
+    def _clear(self) -> None:
+        for child in list(self._children):
+            self._remove_child(child)
+
+    def _remove_child(self, child: WMEHandle) -> None:
+        child.remove()
+        self._children.remove(child)
+        sub = self._sub.pop(id(child), None)
+        if sub is not None:
+            sub._clear()
+
+    def _queue(self, attr: str, value: Symbol) -> WMEHandle:
+        handle = WMEHandle(self._agent, self.identifier, attr, value)
+        self._children.append(handle)
+        self._agent._queue_input(("add", handle, self.identifier, attr, value))
+        return handle
+
+    def _check_live(self) -> None:
+        if self._link is not None and self._link.removed:
+            raise SoarRuntimeError(f"input identifier {self.id} was removed")
+
+    def __repr__(self) -> str:
+        return f"<input {self.id}>"
+
+
+class OutputHandle:
+    """Read-only view of an identifier on the output side (the output-link and below)."""
+
+    def __init__(self, agent: Agent, ident: Identifier) -> None:
+        self._agent = agent
+        self.identifier = ident
+
+    @property
+    def id(self) -> str:
+        return self.identifier.name
+
+    def _wrap(self, value: Symbol) -> Symbol | OutputHandle:
+        return OutputHandle(self._agent, value) if isinstance(value, Identifier) else value
+
+    def children(self) -> list[tuple[Symbol, Symbol | OutputHandle]]:
+        """Every ``(attr, value)`` of this identifier, oldest WME first."""
+        wmes = sorted(self._agent._augmentations(self.identifier), key=lambda w: w.timetag)
+        return [(w.attr, self._wrap(w.value)) for w in wmes if not w.acceptable]
+
+    def get(self, attr: str, default: object = None) -> Symbol | OutputHandle | object:
+        """The (oldest) value of ``attr``, or ``default``."""
+        for key, value in self.children():
+            if key == attr:
+                return value
+        return default
+
+    def all(self, attr: str) -> list[Symbol | OutputHandle]:
+        return [value for key, value in self.children() if key == attr]
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, OutputHandle) and other.identifier is self.identifier
+
+    def __hash__(self) -> int:
+        return hash(id(self.identifier))
+
+    def __repr__(self) -> str:
+        return f"<output {self.id}>"

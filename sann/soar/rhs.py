@@ -1,0 +1,270 @@
+"""Right-hand-side functions, with the Soar 9.6 kernel's arithmetic and text conventions.
+
+Integer operations on integers stay integers; any float makes the result a float; ``/``
+always returns a float; ``div`` and ``mod`` truncate toward zero like C. Floats print as
+C's ``%f`` (``3.500000``), which is what ``write`` and ``concat`` produce in the kernel.
+"""
+
+from __future__ import annotations
+
+import datetime
+import math
+from collections.abc import Callable, Sequence
+from typing import Protocol
+
+from .errors import SoarRuntimeError
+from .memory import Identifier, Symbol
+
+
+class RhsContext(Protocol):
+    """What an RHS function may touch in the agent."""
+
+    def write_output(self, text: str) -> None: ...
+    def request_halt(self) -> None: ...
+    def request_interrupt(self) -> None: ...
+    def decision_count(self) -> int: ...
+    def gensym(self, prefix: str) -> str: ...
+
+
+RhsFunction = Callable[[RhsContext, Sequence[Symbol]], Symbol | None]
+
+#: Value returned by ``(crlf)``: a symbol holding a newline, as in the kernel.
+CRLF = "\n"
+
+
+def format_value(value: Symbol) -> str:
+    """A symbol as ``write``/``concat`` render it: identifiers by name, floats as ``%f``."""
+    if isinstance(value, Identifier):
+        return value.name
+    if isinstance(value, float):
+        return _format_float(value)
+    return str(value)
+
+
+def _format_float(value: float) -> str:
+    if math.isinf(value):
+        return "inf" if value > 0 else "-inf"
+    if math.isnan(value):
+        return "nan"
+    return f"{value:f}"
+
+
+def _number(name: str, value: Symbol) -> int | float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise SoarRuntimeError(f"({name}): {format_value(value)} is not a number")
+    return value
+
+
+def _numbers(name: str, args: Sequence[Symbol]) -> list[int | float]:
+    return [_number(name, a) for a in args]
+
+
+def _plus(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    return sum(_numbers("+", args), 0)
+
+
+def _times(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    return math.prod(_numbers("*", args))
+
+
+def _minus(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    nums = _numbers("-", args)
+    if not nums:
+        raise SoarRuntimeError("(-): needs at least one argument")
+    if len(nums) == 1:
+        return -nums[0]
+    result = nums[0]
+    for n in nums[1:]:
+        result -= n
+    return result
+
+
+def _divide(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    nums = [float(n) for n in _numbers("/", args)]
+    if not nums:
+        raise SoarRuntimeError("(/): needs at least one argument")
+    if len(nums) == 1:
+        nums.insert(0, 1.0)
+    result = nums[0]
+    for n in nums[1:]:
+        if n == 0:
+            raise SoarRuntimeError("(/): attempt to divide by zero")
+        result /= n
+    return result
+
+
+def _int_pair(name: str, args: Sequence[Symbol]) -> tuple[int, int]:
+    if len(args) != 2 or not all(isinstance(a, int) and not isinstance(a, bool) for a in args):
+        raise SoarRuntimeError(f"({name}): needs two integer arguments")
+    a, b = args
+    assert isinstance(a, int) and isinstance(b, int)
+    if b == 0:
+        raise SoarRuntimeError(f"({name}): attempt to divide by zero")
+    return a, b
+
+
+def _div(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    a, b = _int_pair("div", args)
+    quotient = abs(a) // abs(b)
+    return quotient if (a >= 0) == (b >= 0) else -quotient
+
+
+def _mod(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    a, b = _int_pair("mod", args)
+    return int(math.fmod(a, b))
+
+
+def _one(name: str, args: Sequence[Symbol]) -> Symbol:
+    if len(args) != 1:
+        raise SoarRuntimeError(f"({name}): needs exactly one argument")
+    return args[0]
+
+
+def _abs(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    return abs(_number("abs", _one("abs", args)))
+
+
+def _to_int(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    value = _one("int", args)
+    if isinstance(value, str):
+        try:
+            return int(float(value)) if "." in value or "e" in value.lower() else int(value)
+        except ValueError as exc:
+            raise SoarRuntimeError(f"(int): cannot convert {value!r} to an integer") from exc
+    return int(_number("int", value))
+
+
+def _to_float(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    value = _one("float", args)
+    if isinstance(value, str):
+        try:
+            return float(value)
+        except ValueError as exc:
+            raise SoarRuntimeError(f"(float): cannot convert {value!r} to a float") from exc
+    return float(_number("float", value))
+
+
+def _sqrt(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    return math.sqrt(_number("sqrt", _one("sqrt", args)))
+
+
+def _min(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    nums = _numbers("min", args)
+    if not nums:
+        raise SoarRuntimeError("(min): needs at least one argument")
+    return min(nums)
+
+
+def _max(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    nums = _numbers("max", args)
+    if not nums:
+        raise SoarRuntimeError("(max): needs at least one argument")
+    return max(nums)
+
+
+def _round_off(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    if len(args) != 2:
+        raise SoarRuntimeError("(round-off): needs a number and a precision")
+    value, step = _numbers("round-off", args)
+    if step == 0:
+        raise SoarRuntimeError("(round-off): precision must not be zero")
+    result = int(value / step) * step
+    return float(result) if isinstance(value, float) or isinstance(step, float) else int(result)
+
+
+def _concat(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    return "".join(format_value(a) for a in args)
+
+
+def _make_constant_symbol(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    prefix = "".join(format_value(a) for a in args) or "constant"
+    return ctx.gensym(prefix)
+
+
+def _timestamp(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    now = datetime.datetime.now()
+    return now.strftime("%Y-%m-%d %H:%M:%S.") + f"{now.microsecond // 1000:03d}"
+
+
+def _write(ctx: RhsContext, args: Sequence[Symbol]) -> None:
+    ctx.write_output("".join(format_value(a) for a in args))
+    return None
+
+
+def _crlf(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    return CRLF
+
+
+def _halt(ctx: RhsContext, args: Sequence[Symbol]) -> None:
+    ctx.request_halt()
+    return None
+
+
+def _interrupt(ctx: RhsContext, args: Sequence[Symbol]) -> None:
+    ctx.request_interrupt()
+    return None
+
+
+def _dc(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    return ctx.decision_count()
+
+
+def _ifeq(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    if len(args) != 4:
+        raise SoarRuntimeError("(ifeq): needs four arguments")
+    a, b, then, other = args
+    same = a is b if isinstance(a, Identifier) else (type(a) is type(b) and a == b)
+    return then if same else other
+
+
+def _trim(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    return format_value(_one("trim", args)).strip()
+
+
+def _strlen(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    return len(format_value(_one("strlen", args)))
+
+
+def _trig(name: str, fn: Callable[[float], float]) -> RhsFunction:
+    def call(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+        return fn(float(_number(name, _one(name, args))))
+
+    return call
+
+
+def _atan2(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    if len(args) != 2:
+        raise SoarRuntimeError("(atan2): needs two arguments")
+    y, x = _numbers("atan2", args)
+    return math.atan2(y, x)
+
+
+FUNCTIONS: dict[str, RhsFunction] = {
+    "+": _plus,
+    "-": _minus,
+    "*": _times,
+    "/": _divide,
+    "div": _div,
+    "mod": _mod,
+    "abs": _abs,
+    "int": _to_int,
+    "float": _to_float,
+    "sqrt": _sqrt,
+    "sin": _trig("sin", math.sin),
+    "cos": _trig("cos", math.cos),
+    "atan2": _atan2,
+    "min": _min,
+    "max": _max,
+    "round-off": _round_off,
+    "concat": _concat,
+    "make-constant-symbol": _make_constant_symbol,
+    "timestamp": _timestamp,
+    "write": _write,
+    "crlf": _crlf,
+    "halt": _halt,
+    "interrupt": _interrupt,
+    "dc": _dc,
+    "ifeq": _ifeq,
+    "trim": _trim,
+    "strlen": _strlen,
+}
