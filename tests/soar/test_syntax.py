@@ -494,8 +494,11 @@ def test_rule_files_parse_and_round_trip(path: Path) -> None:
 def test_parsing_a_file_of_200_productions_is_fast() -> None:
     """Behaviour, not timing, is asserted: the parse must produce all 200 productions. The
     time is printed for the report (run with -s)."""
-    rule = "sp {{rule-{i} (state <s> ^a.b <x> ^c {{ <y> > 3 }} -^d e) (<x> ^f << g h >>)\n" \
-        "--> (<s> ^operator <o> + =) (<o> ^name n{i} ^value (+ <y> 1)) (write <y> (crlf))}}\n"  # fmt: skip
+    rule = (
+        "sp {{rule-{i} (state <s> ^a.b <x> ^c {{ <y> > 3 }} -^d e) (<x> ^f << g h >>)\n"
+        "--> (<s> ^operator <o> + =) (<o> ^name n{i} ^value (+ <y> 1))\n"
+        "    (write <y> (crlf))}}\n"
+    )
     text = "".join(rule.format(i=i) for i in range(200))
     parse("sp {warm (state <s> ^a b) --> }")
     start = time.perf_counter()
