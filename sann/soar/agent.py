@@ -274,6 +274,7 @@ class Agent:
         self._nil_retractions: list[Instantiation] = []
         self._changed: list[Slot] = []
         self._changed_context: list[Slot] = []
+        self._new_justifications: list[Instantiation] = []
         self._dependents: dict[WME, list[Instantiation]] = {}
         self._gds_index: dict[WME, set[Goal]] = {}
         self._input_ops: list[tuple] = []
@@ -435,6 +436,8 @@ class Agent:
             self._emit("\n--- Application Phase ---\n")
         goal, firing = self._next_active(apply)
         if firing == "":
+            if self._top.sub is not None:
+                self._consistent_through(None)
             self._end_phase(apply, end)
             return
         self._elaboration_cycle(goal, firing)
@@ -564,7 +567,7 @@ class Agent:
             info = self._productions.get(match.production.name)
             if info is None:
                 continue
-            if is_o_supported(info, wmes, goal.id):
+            if is_o_supported(info, wmes, goal.id, match):
                 goal.pending_o[match] = info
             else:
                 goal.pending_i[match] = info
@@ -584,7 +587,7 @@ class Agent:
     def _fire(self, match: object, info: ProductionInfo, goal: Goal) -> Instantiation | None:
         wmes = match.wmes  # type: ignore[attr-defined]
         name = info.production.name
-        o_support = is_o_supported(info, wmes, goal.id)
+        o_support = is_o_supported(info, wmes, goal.id, match)
         inst = Instantiation(name, match, goal, wmes, o_support)
         self._firings += 1
         info.firings += 1
@@ -675,7 +678,8 @@ class Agent:
 
     def _assert_preferences(self, fired: list[Instantiation]) -> None:
         """Add new preferences to their slots in the kernel's order; o-rejects remove."""
-        for inst in reversed(fired):
+        justifications, self._new_justifications = self._new_justifications, []
+        for inst in [*justifications, *reversed(fired)]:
             for pref in reversed(inst.prefs):
                 if self.trace_level >= 5:
                     self._emit("\n+" + trace_preference(pref))
@@ -826,7 +830,7 @@ class Agent:
                     self._select(goal, candidates[0])
                     return True
                 impasse = dec.NO_CHANGE
-        attribute = "operator" if slot.wmes else "state"
+        attribute = "operator" if slot.wmes or impasse != dec.NO_CHANGE else "state"
         sub = goal.sub
         if sub is not None and sub.impasse == impasse and sub.attribute == attribute:
             self._update_items(sub, candidates, slot)
@@ -950,7 +954,9 @@ class Agent:
         self._working_memory_phase()
         self._slots.pop(goal.id, None)
 
-    def _consistent_through(self, limit: Goal) -> bool:
+    def _consistent_through(self, limit: Goal | None) -> bool:
+        """Check decisions from the top down to ``limit`` (the bottom if None); remove the
+        first inconsistent one with everything below it."""
         goal: Goal | None = self._top
         while goal is not None:
             if not self._decision_consistent(goal):
@@ -1041,7 +1047,7 @@ class Agent:
             copy = Preference(pref.type, pref.id, pref.attr, pref.value, pref.referent, just)
             copy.o_supported = pref.o_supported
             just.prefs.append(copy)
-        inst.prefs.extend(just.prefs)
+        self._new_justifications.append(just)
         if not just.o_support:
             for wme in grounds:
                 self._dependents.setdefault(wme, []).append(just)

@@ -35,6 +35,8 @@ class ProductionInfo:
     declared: str | None
     #: Variables naming the tested operators (``<o>`` in ``^operator <o>``), if simple.
     actions: tuple[MakeAction | CallAction, ...]
+    #: Variable names on which the make-actions create preferences.
+    make_ids: tuple[str, ...] = ()
     firings: int = 0
 
     @classmethod
@@ -49,7 +51,14 @@ class ProductionInfo:
                 and not cond.acceptable  # type: ignore[union-attr]
             ):
                 indexes.append(index)
-        return cls(production, tuple(indexes), production.support, production.actions)
+        make_ids = tuple(
+            dict.fromkeys(
+                a.id.name
+                for a in production.actions
+                if isinstance(a, MakeAction) and isinstance(a.id, Var)
+            )
+        )
+        return cls(production, tuple(indexes), production.support, production.actions, make_ids)
 
 
 class Instantiation:
@@ -102,13 +111,29 @@ def match_goal(wmes: tuple[WME | None, ...]) -> Identifier | None:
     return best
 
 
-def is_o_supported(info: ProductionInfo, wmes: tuple[WME | None, ...], goal: Identifier) -> bool:
-    """Whether any action of this match gets o-support (decides IE vs PE firing)."""
+def is_o_supported(
+    info: ProductionInfo, wmes: tuple[WME | None, ...], goal: Identifier, match: object = None
+) -> bool:
+    """Whether this match fires as an o-assertion (PE) rather than an i-assertion (IE).
+
+    It does when the match tests the selected operator of its goal and some action is not an
+    elaboration of that operator (or the rule makes no WMEs at all)."""
     if info.declared is not None:
         return info.declared == "o-support"
-    for index in info.operator_conditions:
-        wme = wmes[index]
-        if wme is not None and wme.id is goal:
+    operators = [
+        wmes[i].value  # type: ignore[union-attr]
+        for i in info.operator_conditions
+        if wmes[i] is not None and wmes[i].id is goal  # type: ignore[union-attr]
+    ]
+    if not operators:
+        return False
+    make_ids = info.make_ids
+    if not make_ids:
+        return True
+    bindings = match.bindings if match is not None else {}  # type: ignore[attr-defined]
+    for name in make_ids:
+        value = bindings.get(name)
+        if value is None or not any(value is op for op in operators):
             return True
     return False
 

@@ -43,7 +43,8 @@ def trace_preference(pref: object) -> str:
 
 
 def _sort_key(wme: WME) -> tuple[str, bool, int]:
-    return (symbol_text(wme.attr), wme.acceptable, wme.timetag)
+    """The kernel sorts by attribute only (stably) over lists kept newest first."""
+    return (symbol_text(wme.attr), wme.acceptable, -wme.timetag)
 
 
 def format_augmentations(ident: Identifier, wmes: list[WME], indent: int) -> str:
