@@ -163,9 +163,7 @@ def _signatures(graph: Graph, rounds: int) -> dict[str, str]:
     for _ in range(rounds):
         new = {}
         for ident, edges in graph.items():
-            parts = sorted(
-                f"{_plain(a, sig)}|{_plain(v, sig)}|{int(acc)}" for a, v, acc in edges
-            )
+            parts = sorted(f"{_plain(a, sig)}|{_plain(v, sig)}|{int(acc)}" for a, v, acc in edges)
             digest = hashlib.sha1((sig[ident] + "\n" + "\n".join(parts)).encode()).hexdigest()
             new[ident] = ident[0] + digest[:16]
         sig = new

@@ -64,9 +64,7 @@ def test_kernel_runs_agent_to_halt(path: Path, kernel_results: dict[Path, RunRes
     assert result.wm and any(t[0] == "S1" for t in result.wm)
 
 
-@pytest.mark.parametrize(
-    "path", [p for p in AGENTS if not read_spec(p).random], ids=_id
-)
+@pytest.mark.parametrize("path", [p for p in AGENTS if not read_spec(p).random], ids=_id)
 def test_kernel_is_reproducible(path: Path, kernel_results: dict[Path, RunResult]) -> None:
     """The oracle itself: a second run in a fresh agent measures exactly the same."""
     again = run_kernel(path, inputs=_inputs(path))
@@ -169,3 +167,42 @@ def _canon(text: str):
         if value[0] == "id":
             graph.setdefault(value[1], [])
     return canonical_wm(graph, ["S1"])
+
+
+# --------------------------------------------------------------------------- the I/O links
+
+
+def _benchmark_module():
+    """benchmarks/engine.py, sharing this process's kernel module (one kernel, not two)."""
+    import importlib.util
+    import sys
+
+    from . import kernel as oracle
+
+    sys.modules.setdefault("kernel", oracle)
+    path = ROOT / "benchmarks" / "engine.py"
+    spec = importlib.util.spec_from_file_location("sann_engine_benchmark", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up while executing it
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_kernel_plans_blocks_through_io_links() -> None:
+    bench = _benchmark_module()
+    scenes = bench.make_scenes(40, 26, seed=3)
+    planner = bench.KernelPlanner()
+    try:
+        plans = [planner.solve(scene) for scene in scenes]
+    finally:
+        planner.close()
+    assert plans == [scene.plan() for scene in scenes]
+    assert any(len(plan) > 3 for plan in plans)
+
+
+def test_our_engine_plans_blocks_through_io_links() -> None:
+    pytest.importorskip("sann.soar.agent", reason="our engine (sann/soar/agent.py) has not landed")
+    bench = _benchmark_module()
+    scenes = bench.make_scenes(40, 26, seed=3)
+    planner = bench.OurPlanner()
+    assert [planner.solve(scene) for scene in scenes] == [scene.plan() for scene in scenes]
