@@ -275,6 +275,8 @@ class Agent:
         self._changed: list[Slot] = []
         self._changed_context: list[Slot] = []
         self._new_justifications: list[Instantiation] = []
+        self._refs: dict[Identifier, int] = {}
+        self._unlinked: list[Identifier] = []
         self._dependents: dict[WME, list[Instantiation]] = {}
         self._gds_index: dict[WME, set[Goal]] = {}
         self._input_ops: list[tuple] = []
@@ -340,6 +342,8 @@ class Agent:
         self._timetag += 1
         wme = WME(ident, attr, value, self._timetag, acceptable)
         self._wm[wme.timetag] = wme
+        if type(value) is Identifier and value.level is None:
+            self._refs[value] = self._refs.get(value, 0) + 1
         self.matcher.add_wme(wme)
         self._wme_adds += 1
         if len(self._wm) > self._wm_max:
@@ -353,6 +357,14 @@ class Agent:
             return
         self.matcher.remove_wme(wme)
         self._wme_removes += 1
+        value = wme.value
+        if type(value) is Identifier and value.level is None:
+            count = self._refs[value] - 1
+            if count:
+                self._refs[value] = count
+            else:
+                del self._refs[value]
+                self._unlinked.append(value)
         if self.trace_level >= 4:
             self._emit("\n<=WM: " + trace_wme(wme))
         dependents = self._dependents.pop(wme, None)
@@ -750,10 +762,32 @@ class Agent:
                 self._update_acceptable_wmes(slot)
             for wme in removes:
                 self._remove_wme(wme)
+            if self._unlinked:
+                self._collect_unlinked()
             for slot in changed:
                 self._collect_garbage(slot)
             for slot in context:
                 self._collect_garbage(slot)
+
+    def _collect_unlinked(self) -> None:
+        """Soar 9.6 garbage-collects identifiers no WME links to any more: their input
+        WMEs, WMEs and preferences (o-supported ones too) go at once, recursively."""
+        while self._unlinked:
+            ident = self._unlinked.pop()
+            if ident in self._refs:
+                continue
+            for wme in list(self._arch.get(ident, ())):
+                self._remove_arch(wme)
+            for slot in list(self._slots.get(ident, {}).values()):
+                for pref in slot.all_preferences():
+                    slot.remove(pref)
+                wmes = list(slot.wmes.values()) + list(slot.acceptable_wmes.values())
+                slot.wmes.clear()
+                slot.acceptable_wmes.clear()
+                for wme in wmes:
+                    if wme is not None:
+                        self._remove_wme(wme)
+            self._slots.pop(ident, None)
 
     def _diff_slot(self, slot: Slot, adds: list, removes: list[WME]) -> None:
         _, candidates = dec.run_preference_semantics(slot, None)
@@ -1038,17 +1072,26 @@ class Agent:
         return out
 
     def _justify(self, inst: Instantiation, results: list[Preference]) -> None:
+        """Stand in for the substate's reasoning with a justification whose conditions are
+        the superstate WMEs the results depend on; its support is computed like a rule's:
+        o-support when those WMEs include the selected operator of its goal."""
         self._justifications += 1
         grounds = tuple(self._backtrace(inst, inst.goal.level, through_o_support=True))
         home = self._goal_of_grounds(grounds, results)
-        just = Instantiation(f"justify{self._justifications}", None, home, (), inst.o_support, True)
+        operators = [
+            w.value for w in grounds if w.id is home.id and w.attr == "operator" and not w.acceptable
+        ]
+        just = Instantiation(
+            f"justify{self._justifications}", None, home, (), bool(operators), True
+        )
         just.grounds = grounds
         for pref in results:
             copy = Preference(pref.type, pref.id, pref.attr, pref.value, pref.referent, just)
-            copy.o_supported = pref.o_supported
+            copy.o_supported = bool(operators) and not any(pref.id is op for op in operators)
+            pref.o_supported = copy.o_supported
             just.prefs.append(copy)
         self._new_justifications.append(just)
-        if not just.o_support:
+        if not all(p.o_supported for p in just.prefs):
             for wme in grounds:
                 self._dependents.setdefault(wme, []).append(just)
         if home.level > 1:
@@ -1096,8 +1139,7 @@ class Agent:
         if slot is None:
             return []
         key = _vkey(wme.value)
-        types = (ACCEPTABLE, REQUIRE) if wme.acceptable or not slot.is_context else ()
-        for ptype in types:
+        for ptype in (ACCEPTABLE, REQUIRE):
             for pref in slot.of_type(ptype):
                 if _vkey(pref.value) == key and not pref.inst.is_justification:
                     return [pref.inst]
