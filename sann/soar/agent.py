@@ -448,8 +448,7 @@ class Agent:
             self._emit("\n--- Application Phase ---\n")
         goal, firing = self._next_active(apply)
         if firing == "":
-            if self._top.sub is not None:
-                self._consistent_through(None)
+            self._consistent_through(None)
             self._end_phase(apply, end)
             return
         self._elaboration_cycle(goal, firing)
@@ -994,7 +993,7 @@ class Agent:
         goal: Goal | None = self._top
         while goal is not None:
             if not self._decision_consistent(goal):
-                if self.trace_level >= 2:
+                if self.trace_level >= 2 and (goal.sub is not None or goal.selected()):
                     self._emit(
                         f"\nRemoving substates of {goal.id} because the operator last selected"
                         f" in {goal.id} is not\nconsistent with the current preferences."
