@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import os
 import sys
+import weakref
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import TextIO
@@ -276,6 +277,9 @@ class Agent:
         self._changed_context: list[Slot] = []
         self._new_justifications: list[Instantiation] = []
         self._refs: dict[Identifier, int] = {}
+        self._sources: weakref.WeakKeyDictionary[WME, Instantiation] = (
+            weakref.WeakKeyDictionary()
+        )
         self._unlinked: list[Identifier] = []
         self._dependents: dict[WME, list[Instantiation]] = {}
         self._gds_index: dict[WME, set[Goal]] = {}
@@ -754,7 +758,9 @@ class Agent:
                 slot.changed = False
                 self._diff_slot(slot, adds, removes)
             for slot, value in adds:
-                slot.wmes[_vkey(value)] = self._add_wme(slot.id, slot.attr, value)
+                wme = slot.wmes[_vkey(value)] = self._add_wme(slot.id, slot.attr, value)
+                if self._level_of(slot.id) > 1:
+                    self._remember_source(wme, slot, (ACCEPTABLE,))
             context, self._changed_context = self._changed_context, []
             for slot in reversed(context):
                 slot.changed = False
@@ -877,7 +883,9 @@ class Agent:
         if goal.sub is not None:
             self._remove_goal(goal.sub)
         slot = goal.op_slot
-        slot.wmes[_vkey(value)] = self._add_wme(goal.id, "operator", value)
+        wme = slot.wmes[_vkey(value)] = self._add_wme(goal.id, "operator", value)
+        if goal.level > 1:
+            self._remember_source(wme, slot, (REQUIRE, ACCEPTABLE))
         name = self._operator_name(value)
         self._operator_names.append(name if name is not None else "?")
         if self.trace_level >= 1:
@@ -1087,7 +1095,6 @@ class Agent:
         for pref in results:
             copy = Preference(pref.type, pref.id, pref.attr, pref.value, pref.referent, just)
             copy.o_supported = bool(operators) and not any(pref.id is op for op in operators)
-            pref.o_supported = copy.o_supported
             just.prefs.append(copy)
         self._new_justifications.append(just)
         if not all(p.o_supported for p in just.prefs):
@@ -1133,7 +1140,20 @@ class Agent:
                     stack.append(source)
         return list(grounds.values())
 
+    def _remember_source(self, wme: WME, slot: Slot, types: tuple[str, ...]) -> None:
+        """Note which instantiation made a substate WME, for backtracing after that
+        instantiation has retracted (the kernel keeps it through ``wme->preference``)."""
+        key = _vkey(wme.value)
+        for ptype in types:
+            for pref in slot.of_type(ptype):
+                if _vkey(pref.value) == key:
+                    self._sources[wme] = pref.inst
+                    return
+
     def _supporting_instantiations(self, wme: WME) -> list[Instantiation]:
+        source = self._sources.get(wme)
+        if source is not None:
+            return [] if source.is_justification else [source]
         slot = self._slot(wme.id, wme.attr, create=False)
         if slot is None:
             return []
