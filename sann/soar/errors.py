@@ -52,3 +52,8 @@ class SoarSemanticError(SoarError):
 
 class SoarRuntimeError(SoarError):
     """Something went wrong while running an agent (bad RHS arguments, runaway rules, ...)."""
+
+
+class SoarWarning(UserWarning):
+    """Something the kernel accepts with a warning (e.g. a preference other than ``+``/``-``
+    on a non-operator attribute, which it ignores). Issued with :func:`warnings.warn`."""

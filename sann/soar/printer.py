@@ -38,6 +38,7 @@ __all__ = [
     "format_condition",
     "format_constant",
     "format_production",
+    "format_rhs_value",
     "format_test",
 ]
 
@@ -47,7 +48,7 @@ _SYMBOL = re.compile(rf"[{_C}]+")
 # variables and the relation / preference / arrow signs.
 _NOT_A_SYMBOL = re.compile(
     r"[+-]?\d+|[+-]?(\d+\.\d*|\.\d+)([eE][+-]?\d*)?|[A-Za-z]\d+|<.+>"
-    r"|-->|[-+<>=@]|<>|<=|>=|<=>|<<|>>"
+    r"|-->|[-+<>=@&]|<>|<=|>=|<=>|<<|>>"
 )
 _KEYWORDS = ("state", "impasse")
 INDENT = "    "
@@ -156,6 +157,7 @@ def format_condition(element: ConditionElement) -> str:
 
 
 def format_rhs_value(value: RhsValue) -> str:
+    """A right-hand-side value: a variable, a constant or a function call."""
     if isinstance(value, FuncCall):
         args = "".join(" " + format_rhs_value(arg) for arg in value.args)
         return f"({value.name}{args})"
@@ -164,7 +166,8 @@ def format_rhs_value(value: RhsValue) -> str:
 
 def _make_text(action: MakeAction) -> str:
     text = f"^{format_rhs_value(action.attr)} {format_rhs_value(action.value)}"
-    if action.preference != "+" or action.referent is not None:
+    # Like the kernel: `+` is written on ^operator (a proposal), implied elsewhere.
+    if action.preference != "+" or action.attr == Const("operator"):
         text += f" {action.preference}"
     if action.referent is not None:
         text += f" {format_rhs_value(action.referent)}"

@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import dataclasses
 import re
+import sys
+import warnings
 from collections.abc import Collection, Iterator
 from dataclasses import dataclass
 from functools import lru_cache
@@ -38,7 +40,8 @@ from lark.exceptions import (
     VisitError,
 )
 
-from sann.soar.errors import SoarSemanticError, SoarSyntaxError
+from sann.soar.errors import SoarSemanticError, SoarSyntaxError, SoarWarning
+from sann.soar.printer import format_action, format_rhs_value
 from sann.soar.production import (
     Action,
     CallAction,
@@ -187,6 +190,8 @@ class _ToDataclasses(Transformer):
         self.file = file
         self.functions = functions
         self._fresh = 0
+        self._warnings: list[str] = []  # this production's, until its name is known
+        self.warnings: list[str] = []  # issued by `parse` to its caller
 
     # -- helpers
 
@@ -378,10 +383,29 @@ class _ToDataclasses(Transformer):
             link = self._placeholder(_first_letter(step))
             actions.append(MakeAction(ident, step, link))
             ident = link
+        attr = make.path[-1]
         for value, prefs in make.values:
+            if attr != Const("operator"):
+                prefs = self._non_operator_preferences(attr, prefs)
             for op, referent in prefs:
-                actions.append(MakeAction(ident, make.path[-1], value, op, referent))
+                actions.append(MakeAction(ident, attr, value, op, referent))
         return actions
+
+    def _non_operator_preferences(
+        self, attr: RhsValue, prefs: tuple[tuple[str, RhsValue | None], ...]
+    ) -> tuple[tuple[str, RhsValue | None], ...]:
+        """The kernel's rule off ``^operator``: each ``-`` is a reject; every other unary sign
+        counts as ``+`` (with a warning), and one acceptable is made only if nothing rejects.
+        Binary preferences stay, for `_check_binary_preferences` to refuse."""
+        for op, referent in prefs:
+            if referent is None and op not in "+-":
+                self._warnings.append(
+                    f"preference '{op}' on the non-operator attribute ^{format_rhs_value(attr)} "
+                    "is ignored, as in Soar (only + and - apply there)"
+                )
+        binary = tuple(p for p in prefs if p[1] is not None)
+        rejects = tuple(p for p in prefs if p == ("-", None))
+        return binary + (rejects or (("+", None),))
 
     def function_name(self, items: list) -> str:
         token = items[0]
@@ -429,6 +453,8 @@ class _ToDataclasses(Transformer):
         )
         production = _name_placeholders(production)
         _check_production(production, self.functions)
+        self.warnings.extend(_where(production) + message for message in self._warnings)
+        self._warnings.clear()
         return production
 
 
@@ -438,6 +464,12 @@ class _ToDataclasses(Transformer):
 def _float_text(text: str) -> str:
     """Soar accepts ``1.5e`` and ``2.e+``: an exponent without digits counts as none."""
     return re.sub(r"[eE][+-]?$", "", text)
+
+
+def _where(production: Production) -> str:
+    location = production.location
+    prefix = f"{location.file}:{location.line}: " if location else ""
+    return f"{prefix}production {production.name}: "
 
 
 def _is_value(item: object) -> bool:
@@ -583,8 +615,6 @@ def _ungrounded(action: Action, grounded: set[str]) -> list[str]:
 
 
 def _describe_action(action: Action) -> str:
-    from sann.soar.printer import format_action
-
     return format_action(action)
 
 
@@ -593,8 +623,7 @@ def _check_binary_preferences(production: Production) -> None:
         if (
             isinstance(action, MakeAction)
             and action.referent is not None
-            and isinstance(action.attr, Const)
-            and action.attr.value != "operator"
+            and action.attr != Const("operator")
         ):
             raise SoarSemanticError(
                 production.name,
@@ -669,7 +698,7 @@ def _from_lark(error: UnexpectedInput, text: str, file: str) -> SoarSyntaxError:
         token = error.token
         expected = _readable(error.accepts or error.expected)
         message = f"unexpected {_describe_token(token)}"
-        if token.type in _FALLBACK_TYPES and token[:1] in "|\"":
+        if token.type in _FALLBACK_TYPES and token[:1] in '|"':
             message = f"unterminated string: no closing {token[:1]}"
         return _syntax_error(text, file, message, token.line or 1, token.column or 1, expected)
     if isinstance(error, UnexpectedCharacters):
@@ -680,6 +709,14 @@ def _from_lark(error: UnexpectedInput, text: str, file: str) -> SoarSyntaxError:
     expected = _readable(getattr(error, "expected", None) or ())
     line, column = _end_position(text)
     return _syntax_error(text, file, "unexpected end of input", line, column, expected)
+
+
+def _caller_stacklevel() -> int:
+    """The warnings stack level of the first frame outside this module (the user's call)."""
+    frame, level = sys._getframe(1), 1
+    while frame is not None and frame.f_code.co_filename == __file__:
+        frame, level = frame.f_back, level + 1
+    return level
 
 
 # ---------------------------------------------------------------------------- public API
@@ -702,12 +739,16 @@ def parse(
     except LarkError as error:  # defensive: any other Lark failure still gets a position
         line, column = _end_position(text)
         raise _syntax_error(text, file, f"cannot parse: {error}", line, column) from None
+    transformer = _ToDataclasses(text, file, functions)
     try:
-        return _ToDataclasses(text, file, functions).transform(tree)
+        return transformer.transform(tree)
     except VisitError as error:
         if isinstance(error.orig_exc, SoarSyntaxError | SoarSemanticError):
             raise error.orig_exc from None
         raise
+    finally:
+        for message in transformer.warnings:
+            warnings.warn(message, SoarWarning, stacklevel=_caller_stacklevel())
 
 
 def parse_file(path: str | Path, functions: Collection[str] = KNOWN_RHS_FUNCTIONS) -> list:

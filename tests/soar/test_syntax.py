@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import time
+import warnings
 from pathlib import Path
 
 import pytest
 
-from sann.soar.errors import SoarSemanticError, SoarSyntaxError
+from sann.soar.errors import SoarSemanticError, SoarSyntaxError, SoarWarning
 from sann.soar.printer import format_production
 from sann.soar.production import (
     CallAction,
@@ -257,9 +258,29 @@ def test_actions_make_and_remove_and_call() -> None:
 
 
 def test_every_unary_preference() -> None:
-    actions = rhs("(<s> ^operator <o> + - ! ~ @ >, <, =)")
-    assert [a.preference for a in actions] == ["+", "-", "!", "~", "@", ">", "<", "="]
+    actions = rhs("(<s> ^operator <o> + - ! ~ >, <, =)")
+    assert [a.preference for a in actions] == ["+", "-", "!", "~", ">", "<", "="]
     assert all(a.referent is None for a in actions)
+
+
+def test_non_operator_preferences_follow_the_kernel() -> None:
+    # Off ^operator the kernel keeps each reject, and otherwise makes one acceptable,
+    # ignoring (with a warning) any other unary sign.
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        actions = rhs("(<s> ^f g ~ + ! h - i ^<x> j >)")
+    messages = [str(w.message) for w in caught if w.category is SoarWarning]
+    assert [m.split("preference ")[1][:3] for m in messages] == ["'~'", "'!'", "'>'"]
+    assert all(m.startswith("<string>:1: production p: ") for m in messages)
+    assert caught[0].filename == __file__  # points at the caller of parse()
+    assert actions == (
+        make("<s>", "f", "g"),
+        make("<s>", "f", "h", "-"),
+        make("<s>", "f", "i"),
+        make("<s>", "<x>", "j"),
+    )
+    assert rhs("(<s> ^f g - -)") == (make("<s>", "f", "g", "-"),) * 2
+    assert rhs("(<s> ^f g + -)") == (make("<s>", "f", "g", "-"),)
 
 
 def test_binary_and_numeric_preferences() -> None:
@@ -397,6 +418,8 @@ def _syntax_error(text: str) -> SoarSyntaxError:
         ("sp {p :foo (state <s> ^a b) --> }", 1, 7, ["flag"]),
         ("sp {p (state <s> ^a b) --> (<s> ^a b < -)}", 1, 40, ["after '<'"]),
         ("sp {p (state <s> ^a b) --> (<s> ^a b ^c)}", 1, 40, ["')'"]),
+        ("sp {p (state <s> ^a b) --> (<s> ^operator b @)}", 1, 45, ["'@'"]),
+        ("sp {p (state <s> ^a b) --> (<s> ^operator b &)}", 1, 45, ["'&'"]),
         ("sp {p (state <s> ^a { }) --> }", 1, 23, ["'}'"]),
         ("sp {p (state <s> ^a << <x> >>) --> }", 1, 24, ["variable '<x>'"]),
         ("sp {p (state <s> ^a 1.5abc) --> }", 1, 22, ["'.'"]),
@@ -454,6 +477,7 @@ def test_caret_keeps_tabs_aligned() -> None:
         ("sp {p (state <s> ^a b) --> (cmd print)}", ["'cmd' is refused"]),
         ("sp {p (state <s> ^a b) --> (write (exec rm))}", ["'exec' is refused"]),
         ("sp {p (state <s> ^a b) --> (<s> ^c d > e)}", ["binary preference", "^operator"]),
+        ("sp {p (state <s> ^a <x>) --> (<s> ^<x> d = e)}", ["binary preference"]),
     ],
 )
 def test_semantic_errors_name_the_production(text: str, words: list[str]) -> None:

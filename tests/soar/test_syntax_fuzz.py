@@ -57,7 +57,7 @@ def _parses_or_fails_cleanly(text: str) -> None:
 
 # ------------------------------------------------------------------------ (a) garbage
 
-SOAR_CHARS = "sp{}()^<>=-+!~@.,;|\"#\n\t *$%&/:?_<<>>012345.eE" + string.ascii_letters[:8]
+SOAR_CHARS = 'sp{}()^<>=-+!~@.,;|"#\n\t *$%&/:?_<<>>012345.eE' + string.ascii_letters[:8]
 SOAR_WORDS = [
     "sp", "{", "}", "(", ")", "state", "impasse", "<s>", "<x>", "^", "^a", ".", "-->", "-",
     "+", "<<", ">>", "<>", "<=>", "@", "!@", "|x y|", '"doc"', ":o-support", "1", "2.5",
@@ -186,9 +186,7 @@ def conditions(depth: int = 0) -> st.SearchStrategy:
 def productions(draw: st.DrawFn) -> Production:
     bound = draw(st.lists(VARS, min_size=1, max_size=3, unique=True))
     first = Condition(bound[0], draw(TESTS), bound[-1], goal=draw(st.sampled_from([None, "state"])))
-    more = [
-        Condition(draw(st.sampled_from(bound)), draw(CONSTS), var) for var in bound[1:-1]
-    ]
+    more = [Condition(draw(st.sampled_from(bound)), draw(CONSTS), var) for var in bound[1:-1]]
     conds = [first, *more, *draw(st.lists(conditions(), max_size=4))]
     grounded = st.sampled_from(bound)
     rhs_value = st.recursive(
@@ -200,20 +198,28 @@ def productions(draw: st.DrawFn) -> Production:
         ),
         max_leaves=4,
     )
-    unary = st.builds(
-        MakeAction, grounded, rhs_value, rhs_value, st.sampled_from(["+", "-", "!", "~", "@",
-                                                                     ">", "<", "="])
-    )  # fmt: skip
-    binary = st.builds(
+    # The parser's normal form (the kernel's rule): any preference on ^operator; elsewhere
+    # only + and -, and binary preferences only on ^operator.
+    operator = st.just(Const("operator"))
+    on_operator = st.builds(
         MakeAction,
         grounded,
-        st.one_of(st.just(Const("operator")), grounded),
+        operator,
         rhs_value,
-        st.sampled_from([">", "<", "="]),
+        st.sampled_from(["+", "-", "!", "~", ">", "<", "="]),
+    )
+    elsewhere = st.builds(
+        MakeAction,
+        grounded,
+        rhs_value.filter(lambda v: v != Const("operator")),
         rhs_value,
+        st.sampled_from(["+", "-"]),
+    )
+    binary = st.builds(
+        MakeAction, grounded, operator, rhs_value, st.sampled_from([">", "<", "="]), rhs_value
     )
     call = st.builds(CallAction, rhs_value.filter(lambda v: isinstance(v, FuncCall)))
-    actions = draw(st.lists(st.one_of(unary, binary, call), max_size=5))
+    actions = draw(st.lists(st.one_of(on_operator, elsewhere, binary, call), max_size=5))
     return Production(
         name=draw(st.one_of(NAMES, SYMBOLS).filter(lambda n: n not in ("s1", "S1"))),
         conditions=tuple(conds),
