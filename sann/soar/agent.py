@@ -277,9 +277,7 @@ class Agent:
         self._changed_context: list[Slot] = []
         self._new_justifications: list[Instantiation] = []
         self._refs: dict[Identifier, int] = {}
-        self._sources: weakref.WeakKeyDictionary[WME, Instantiation] = (
-            weakref.WeakKeyDictionary()
-        )
+        self._sources: weakref.WeakKeyDictionary[WME, Instantiation] = weakref.WeakKeyDictionary()
         self._unlinked: list[Identifier] = []
         self._dependents: dict[WME, list[Instantiation]] = {}
         self._gds_index: dict[WME, set[Goal]] = {}
@@ -461,9 +459,7 @@ class Agent:
         if firing == "PE":
             self._pe_cycles += 1
         if self._phase_cycles >= self.max_elaborations and not self._halted:
-            self._emit(
-                f"\nWarning: reached max-elaborations; proceeding to {end} phase."
-            )
+            self._emit(f"\nWarning: reached max-elaborations; proceeding to {end} phase.")
             self._end_phase(apply, end)
 
     def _end_phase(self, apply: bool, end: str) -> None:
@@ -482,8 +478,6 @@ class Agent:
         Checks the goal stack's consistency like the kernel when the active level moves or
         a goal switches from i- to o-firing; an inconsistent decision ends the phase.
         """
-        if self._nil_retractions:
-            return None, "NIL"
         goal: Goal | None = self._top
         chosen: Goal | None = None
         firing = ""
@@ -496,7 +490,9 @@ class Agent:
                 break
             goal = goal.sub
         if chosen is None:
-            return None, ""
+            # Retractions of instantiations whose goal is gone are done in any cycle; on
+            # their own they make a cycle at "level 0", like the kernel's.
+            return (None, "NIL") if self._nil_retractions else (None, "")
         previous, previous_type = self._active, self._active_type
         check: Goal | None = None
         if previous is not None and previous.alive:
@@ -524,9 +520,8 @@ class Agent:
                     f"\n--- Inner Elaboration Phase, active level {goal.level} goal {goal.id} ---\n"
                 )
         fired: list[Instantiation] = []
-        if goal is None:
-            retractions, self._nil_retractions = self._nil_retractions, []
-        else:
+        retractions, self._nil_retractions = self._nil_retractions, []
+        if goal is not None:
             queue = goal.pending_i if firing == "IE" else goal.pending_o
             if queue:
                 matches = list(queue.items())
@@ -536,7 +531,8 @@ class Agent:
                     inst = self._fire(match, info, goal)
                     if inst is not None:
                         fired.append(inst)
-            retractions, goal.retractions = goal.retractions, []
+            retractions.extend(goal.retractions)
+            goal.retractions = []
         for inst in retractions:
             self._retract(inst)
         self._assert_preferences(fired)
@@ -1086,7 +1082,9 @@ class Agent:
         grounds = tuple(self._backtrace(inst, inst.goal.level, through_o_support=True))
         home = self._goal_of_grounds(grounds, results)
         operators = [
-            w.value for w in grounds if w.id is home.id and w.attr == "operator" and not w.acceptable
+            w.value
+            for w in grounds
+            if w.id is home.id and w.attr == "operator" and not w.acceptable
         ]
         just = Instantiation(
             f"justify{self._justifications}", None, home, (), bool(operators), True

@@ -117,7 +117,7 @@ def is_o_supported(
     """Whether this match fires as an o-assertion (PE) rather than an i-assertion (IE).
 
     It does when the match tests the selected operator of its goal and some action is not an
-    elaboration of that operator (or the rule makes no WMEs at all)."""
+    elaboration of that operator."""
     if info.declared is not None:
         return info.declared == "o-support"
     operators = [
@@ -129,7 +129,7 @@ def is_o_supported(
         return False
     make_ids = info.make_ids
     if not make_ids:
-        return True
+        return False  # the kernel fires write/halt-only rules as i-assertions
     bindings = match.bindings if match is not None else {}  # type: ignore[attr-defined]
     for name in make_ids:
         value = bindings.get(name)
