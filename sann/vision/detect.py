@@ -21,8 +21,9 @@ from typing import Literal
 import numpy as np
 
 from sann.vision.cup import cup_mesh
-from sann.vision.icp import ModelCloud, icp_point_to_plane, model_cloud_from_mesh
+from sann.vision.icp import IcpResult, ModelCloud, icp_point_to_plane, model_cloud_from_mesh
 from sann.vision.linemod import (
+    MATCH_OFFSET,
     T_LEVEL0,
     Matches,
     TemplateParams,
@@ -85,6 +86,11 @@ class DetectConfig:
     min_icp_inliers: int = 150
     #: ... and if the refined pose agrees with the depth image (see ``depth_agreement``).
     min_agreement: float = 0.6
+    #: A detection this well confirmed suppresses the remaining hypotheses around it.
+    sure_agreement: float = 0.85
+    #: Views with |cos(axis, line of sight)| below this also try the end-over-end twin.
+    side_view_cos: float = 0.7
+    icp_points: int = 1000
     max_detections: int = MAX_DETECTIONS
 
     def __post_init__(self) -> None:
@@ -182,7 +188,9 @@ def coarse_poses(templates: TemplateSet, matches: Matches, index: np.ndarray,
     """Pose hypotheses of the matches ``index``; those without depth support are dropped."""
     st = stacked_features(templates)
     tid = matches.template_id[index]
-    x, y = matches.x[index], matches.y[index]
+    # A match's corner lies 0..T-1 px above-left of the true one (see match_templates); the
+    # middle of that range is the unbiased estimate.
+    x, y = matches.x[index] + MATCH_OFFSET, matches.y[index] + MATCH_OFFSET
     feats = st["depth"][tid]
     h, w = depth_mm.shape
     fx = np.clip(x[:, None] + feats[..., 0], 0, w - 1)
@@ -265,33 +273,56 @@ def _flipped(rotation: np.ndarray) -> np.ndarray:
 
 def _refine(cands: Candidates, order: np.ndarray, depth_mm: np.ndarray, K: np.ndarray,
             config: DetectConfig) -> list[Detection]:
-    """ICP from each hypothesis and from its end-over-end twin; keep the better-verified one.
+    """ICP from each hypothesis (best LineMod score first); keep the ones the depth confirms.
 
     A cup seen from the side is nearly symmetric end to end (a slightly tapered cylinder), so
-    LineMod sometimes picks the reversed view and ICP, being local, cannot turn it over.
+    LineMod sometimes picks the reversed view and ICP, being local, cannot turn it over: for
+    side views the end-over-end twin is refined too and the better-verified one kept.
+    Hypotheses next to a cup already confirmed beyond doubt are not refined again.
     """
     model = cup_model_cloud()
-    out = []
+    out: list[Detection] = []
+    sure: list[np.ndarray] = []
     for i in order:
+        if sure and np.min(np.linalg.norm(np.array(sure) - cands.position[i], axis=1)) < \
+                config.nms_radius_mm:
+            continue
         pts = _scene_points(depth_mm, K, cands.window[i], cands.position[i, 2])
         if len(pts) < config.min_icp_inliers:
             continue
-        stride = max(1, len(pts) // 1500)
-        best = None
-        for rot in (cands.rotation[i], _flipped(cands.rotation[i])):
-            res = icp_point_to_plane(model, pts[::stride], rot, cands.position[i])
-            if res.n_inliers * stride < config.min_icp_inliers:
-                continue
-            if np.linalg.norm(res.translation - cands.position[i]) > config.nms_radius_mm:
-                continue
-            fit = depth_agreement(model, res.rotation, res.translation, depth_mm, K)
-            if best is None or fit > best[0]:
-                best = (fit, res)
-        if best is None or best[0] < config.min_agreement:
+        best = _verified_icp(model, pts, cands.rotation[i], cands.position[i], depth_mm, K,
+                             config)
+        if best is None:
             continue
         fit, res = best
         out.append(Detection(res.translation, res.rotation, float(cands.score[i] * fit)))
+        if fit >= config.sure_agreement:
+            sure.append(res.translation)
     return out
+
+
+def _verified_icp(model: ModelCloud, pts: np.ndarray, rotation: np.ndarray,
+                  position: np.ndarray, depth_mm: np.ndarray, K: np.ndarray,
+                  config: DetectConfig) -> tuple[float, IcpResult] | None:
+    """The best (depth agreement, ICP result) over the hypothesis and, seen side on, its twin."""
+    stride = max(1, len(pts) // config.icp_points)
+    ray = position / np.linalg.norm(position)
+    starts = [rotation]
+    if abs(float(rotation[:, 2] @ ray)) < config.side_view_cos:
+        starts.append(_flipped(rotation))
+    best = None
+    for rot in starts:
+        res = icp_point_to_plane(model, pts[::stride], rot, position)
+        if res.n_inliers * stride < config.min_icp_inliers:
+            continue
+        if np.linalg.norm(res.translation - position) > config.nms_radius_mm:
+            continue
+        fit = depth_agreement(model, res.rotation, res.translation, depth_mm, K)
+        if best is None or fit > best[0]:
+            best = (fit, res)
+    if best is None or best[0] < config.min_agreement:
+        return None
+    return best
 
 
 def detect_cups(rgb: np.ndarray, depth_mm: np.ndarray, K: np.ndarray,
