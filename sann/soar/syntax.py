@@ -97,9 +97,10 @@ _PLACEHOLDER = "\0"
 
 
 class _BraceNewlines:
-    """Post-lexer: a newline ends a command only outside braces."""
+    """Post-lexer: a newline or `;` ends a command only outside braces; inside them both are
+    white space (the kernel reads ``^a b;c`` as two values)."""
 
-    always_accept = ("_NL",)
+    always_accept = ("_NL", "SEMICOLON")
 
     def process(self, stream: Iterator[Token]) -> Iterator[Token]:
         depth = 0
@@ -108,7 +109,7 @@ class _BraceNewlines:
                 depth += 1
             elif token.type == "RBRACE":
                 depth = max(0, depth - 1)
-            elif token.type == "_NL" and depth:
+            elif token.type in self.always_accept and depth:
                 continue
             yield token
 
@@ -337,9 +338,9 @@ class _ToDataclasses(Transformer):
     def _resolve_preferences(
         self, items: list
     ) -> Iterator[tuple[RhsValue, tuple[tuple[str, RhsValue | None], ...]]]:
-        """Soar's rule: a binary sign (``> < =``) takes the next value as its referent unless
-        a comma, ``^`` or ``)`` follows it; ``+ - ! ~ @`` are always unary; one comma may
-        follow a value or a preference."""
+        """Soar's rule: a binary sign (``> < =``) takes the next item as its referent when
+        that is a value, else it is unary (``< -`` is worse-than-all, then reject);
+        ``+ - ! ~`` are always unary; one comma may follow a value or a preference."""
         i = 0
         while i < len(items):
             value = items[i]
@@ -355,8 +356,6 @@ class _ToDataclasses(Transformer):
                 if pref.op in "><=" and following is not None and _is_value(following):
                     prefs.append((pref.op, following))
                     i += 2
-                elif pref.op in "><=" and isinstance(following, _Preference):
-                    raise self._item_error(following, f"a value or ',' after '{pref.op}'")
                 else:
                     prefs.append((pref.op, None))
                     i += 1
@@ -542,7 +541,14 @@ def _name_placeholders(production: Production) -> Production:
 
 
 def _check_production(production: Production, functions: Collection[str]) -> None:
-    """The load-time checks of the kernel (and our refusal of exec/cmd)."""
+    """The load-time checks of the kernel (and our refusal of exec/cmd and templates)."""
+    if "template" in production.flags:
+        raise SoarSemanticError(
+            production.name,
+            "':template' (a Soar-RL template) is not supported: reinforcement learning is not "
+            "part of this engine",
+            production.location,
+        )
     for item in _walk(production.actions):
         if isinstance(item, FuncCall):
             _check_function(production, item, functions)
