@@ -126,16 +126,53 @@ class Agent:
         self.trace_level = int(level)
 
     def load(self, text: str, file: str = "<string>") -> None:
-        """Load productions and run commands from rule-file text."""
+        """Load productions and run commands from rule-file text.
+
+        As in the kernel, the first error stops the rest of the text: what precedes the
+        item in error is loaded, then the error is raised."""
         from . import commands
         from .syntax import parse
 
         base = Path(file).resolve().parent if not file.startswith("<") else Path.cwd()
-        for item in parse(text, file, FUNCTIONS.keys()):
+        try:
+            items = parse(text, file, FUNCTIONS.keys())
+            error: SoarError | None = None
+        except SoarError as exc:
+            items, error = self._items_before(text, file, exc), exc
+        for item in items:
             if isinstance(item, Production):
                 self.add_production(item)
             elif isinstance(item, Command):
                 commands.execute(self, item, base)
+        if error is not None:
+            raise error
+
+    @staticmethod
+    def _items_before(text: str, file: str, error: SoarError) -> list:
+        """The items that parse before the line of ``error`` (empty if none can be found)."""
+        from .syntax import parse
+
+        line = getattr(error, "line", None)
+        location = getattr(error, "location", None)
+        if location is not None:
+            line = location.line
+        if not isinstance(line, int):
+            return []
+        lines = text.splitlines(keepends=True)
+        starts = [
+            i
+            for i, row in enumerate(lines[: line - 1])
+            if row[:1] not in (" ", "\t", "#", "\n", "}", "(", "-", "") and row.strip()
+        ]
+        cut = line - 1
+        while True:
+            try:
+                return parse("".join(lines[:cut]), file, FUNCTIONS.keys())
+            except SoarError:
+                earlier = [i for i in starts if i < cut]
+                if not earlier:
+                    return []
+                cut = earlier[-1]
 
     def source(self, path: str | os.PathLike[str]) -> None:
         """Load a rule file; relative paths resolve against the current source directory."""
