@@ -1,0 +1,113 @@
+"""Focused comparisons with the real Soar 9.6 kernel (soar_sml) on semantic corners of the
+decision process: counts of decisions, elaboration cycles, firings, WM changes and the
+decision trace must be the kernel's."""
+
+from __future__ import annotations
+
+import io
+import re
+
+import pytest
+
+from sann.soar import Agent
+
+sml = pytest.importorskip("soar_sml")
+
+AGENTS = {
+    "results-and-consistency": """
+sp {pa (state <s> ^superstate nil -^done) --> (<s> ^operator <o> +) (<o> ^name a)}
+sp {pb (state <s> ^superstate nil -^done) --> (<s> ^operator <o> +) (<o> ^name b)}
+sp {elab*op (state <s> ^operator <o>) --> (<o> ^selected yes)}
+sp {tie (state <s> ^impasse tie ^superstate <ss> ^item <i>) (<i> ^name a)
+   --> (<ss> ^operator <i> >)}
+sp {apply (state <s> ^operator <o>) (<o> ^name a) --> (<s> ^done t)}
+""",
+    "operator-no-change-results": """
+sp {p (state <s> ^superstate nil -^done) --> (<s> ^operator <x> + >) (<x> ^name a)}
+sp {sub (state <s> ^impasse no-change ^attribute operator ^superstate <ss>)
+        (<ss> ^operator <o>)
+   --> (<s> ^foo <zz>) (<zz> ^bar 1) (<s> ^operator <p> +) (<p> ^name subop)}
+sp {subapply (state <s> ^operator.name subop ^superstate <ss>)
+   --> (<ss> ^done t ^res (/ 7 2) ^res3 (div 7 2) ^res6 (mod -7 2))
+       (write (/ 6 2) | | 2.50 | | (* 3 1.0))}
+""",
+    "conflict-with-third-candidate": """
+sp {pa (state <s> ^superstate nil) --> (<s> ^operator <o> + =) (<o> ^name a)}
+sp {pb (state <s> ^superstate nil) --> (<s> ^operator <o> + =) (<o> ^name b)}
+sp {pc (state <s> ^superstate nil) --> (<s> ^operator <o> +) (<o> ^name c)}
+sp {pref (state <s> ^operator <o1> + ^operator <o2> +) (<o1> ^name a) (<o2> ^name b)
+   --> (<s> ^operator <o1> > <o2>) (<s> ^operator <o2> > <o1>)}
+""",
+    "runaway-max-elaborations": """
+max-elaborations 5
+sp {p (state <s> ^superstate nil) --> (<s> ^operator <o> +) (<o> ^name a)}
+sp {flip (state <s> ^superstate nil -^x) --> (<s> ^x 1)}
+""",
+    "reject-selected-operator": """
+sp {p (state <s> ^superstate nil -^marked) --> (<s> ^operator <o> +) (<o> ^name mark)}
+sp {r (state <s> ^operator <o> + ^marked yes) (<o> ^name mark) --> (<s> ^operator <o> -)}
+sp {a (state <s> ^operator.name mark -^marked) --> (<s> ^marked yes)}
+sp {f (state <s> ^marked yes) --> (<s> ^operator <o> +) (<o> ^name finish)}
+sp {fa (state <s> ^operator.name finish) --> (write |finished| (crlf)) (halt)}
+""",
+    "garbage-collection": """
+sp {p (state <s> ^superstate nil -^stage) --> (<s> ^operator <o> +) (<o> ^name make)}
+sp {a (state <s> ^operator.name make) --> (<s> ^stage 1 ^thing <t>) (<t> ^part <p>)
+   (<p> ^size 3)}
+sp {pdrop (state <s> ^stage 1) --> (<s> ^operator <o> +) (<o> ^name drop)}
+sp {adrop (state <s> ^operator.name drop ^thing <t>) --> (<s> ^thing <t> - ^stage 1 - 2)}
+""",
+}
+
+
+def kernel_run(text: str, decisions: int, tmp_path) -> tuple[dict, str]:
+    path = tmp_path / "agent.soar"
+    path.write_text(text)
+    kernel = sml.Kernel.CreateKernelInCurrentThread(True, 0)
+    try:
+        agent = kernel.CreateAgent("probe")
+        log: list[str] = []
+        agent.RegisterForPrintEvent(
+            sml.smlEVENT_PRINT, lambda mid, ud, ag, msg: log.append(msg), None
+        )
+        agent.ExecuteCommandLine(f"source {path}")
+        agent.ExecuteCommandLine("watch 1")
+        log.clear()
+        agent.ExecuteCommandLine(f"run {decisions}")
+        stats = agent.ExecuteCommandLine("stats")
+    finally:
+        kernel.Shutdown()
+
+    def grab(pattern: str) -> int:
+        return int(re.search(pattern, stats).group(1))  # type: ignore[union-attr]
+
+    figures = {
+        "decisions": grab(r"(\d+) decisions"),
+        "elaboration_cycles": grab(r"(\d+) elaboration cycles"),
+        "production_firings": grab(r"(\d+) production firings"),
+        "wme_changes": grab(r"(\d+) wme changes"),
+        "wm_size": grab(r"WM size: (\d+) current"),
+    }
+    return figures, "".join(log)
+
+
+def our_run(text: str, decisions: int) -> tuple[dict, str]:
+    out = io.StringIO()
+    agent = Agent(out=out)
+    agent.load(text)
+    agent.trace(1)
+    agent.run(decisions)
+    keys = ("decisions", "elaboration_cycles", "production_firings", "wme_changes", "wm_size")
+    return {k: agent.stats[k] for k in keys}, out.getvalue()
+
+
+def _decision_lines(trace: str) -> list[str]:
+    return [line for line in trace.splitlines() if re.match(r"\s+\d+:", line)]
+
+
+@pytest.mark.parametrize("name", sorted(AGENTS))
+def test_agrees_with_kernel(name: str, tmp_path) -> None:
+    theirs, their_trace = kernel_run(AGENTS[name], 6, tmp_path)
+    ours, our_trace = our_run(AGENTS[name], 6)
+    assert ours == theirs
+    assert _decision_lines(our_trace) == _decision_lines(their_trace)

@@ -1,0 +1,120 @@
+"""RHS functions with the kernel's arithmetic and formatting (figures from soar_sml 9.6)."""
+
+from __future__ import annotations
+
+import pytest
+
+from sann.soar.errors import SoarRuntimeError
+from sann.soar.memory import Identifier
+from sann.soar.rhs import FUNCTIONS, format_value
+
+
+class Ctx:
+    def __init__(self) -> None:
+        self.written: list[str] = []
+        self.halted = self.interrupted = False
+        self.counter = 0
+
+    def write_output(self, text: str) -> None:
+        self.written.append(text)
+
+    def request_halt(self) -> None:
+        self.halted = True
+
+    def request_interrupt(self) -> None:
+        self.interrupted = True
+
+    def decision_count(self) -> int:
+        return 7
+
+    def gensym(self, prefix: str) -> str:
+        self.counter += 1
+        return f"{prefix}{self.counter}"
+
+
+def call(name: str, *args):
+    return FUNCTIONS[name](Ctx(), list(args))
+
+
+@pytest.mark.parametrize(
+    ("name", "args", "expected"),
+    [
+        ("+", (), 0),
+        ("+", (1, 2), 3),
+        ("+", (1, 2.0), 3.0),
+        ("*", (), 1),
+        ("*", (1.5, 2), 3.0),
+        ("-", (5,), -5),
+        ("-", (5, 1, 1), 3),
+        ("/", (7, 2), 3.5),
+        ("/", (6, 2), 3.0),
+        ("/", (4,), 0.25),
+        ("div", (7, 2), 3),
+        ("div", (-7, 2), -3),
+        ("mod", (-7, 2), -1),
+        ("mod", (7, -2), 1),
+        ("abs", (-2,), 2),
+        ("abs", (-2.5,), 2.5),
+        ("int", (3.7,), 3),
+        ("int", (-3.7,), -3),
+        ("int", ("12",), 12),
+        ("float", (3,), 3.0),
+        ("round-off", (3.456, 0.1), 3.4),
+        ("concat", ("a", 1, 2.5, "x y"), "a12.500000x y"),
+        ("ifeq", ("a", "a", "yes", "no"), "yes"),
+        ("ifeq", (1, 1.0, "yes", "no"), "no"),
+        ("min", (3, 1, 2), 1),
+        ("max", (3, 1, 2.5), 3),
+        ("strlen", ("abc",), 3),
+        ("trim", ("  x ",), "x"),
+        ("sqrt", (4,), 2.0),
+    ],
+)
+def test_functions(name: str, args: tuple, expected) -> None:
+    result = call(name, *args)
+    assert result == pytest.approx(expected) if isinstance(expected, float) else result == expected
+    assert type(result) is type(expected)
+
+
+def test_int_and_float_types_are_kept() -> None:
+    assert type(call("+", 1, 2)) is int
+    assert type(call("/", 6, 2)) is float
+
+
+@pytest.mark.parametrize(
+    ("name", "args"),
+    [
+        ("/", (1, 0)),
+        ("div", (1, 0)),
+        ("mod", (1.5, 2)),
+        ("+", ("a", 1)),
+        ("-", ()),
+        ("int", ("x",)),
+    ],
+)
+def test_errors(name: str, args: tuple) -> None:
+    with pytest.raises(SoarRuntimeError):
+        call(name, *args)
+
+
+def test_write_crlf_halt_interrupt_dc_and_gensym() -> None:
+    ctx = Ctx()
+    FUNCTIONS["write"](ctx, ["x", 1, 2.5, Identifier("O", 3), FUNCTIONS["crlf"](ctx, [])])
+    assert ctx.written == ["x12.500000O3\n"]
+    FUNCTIONS["halt"](ctx, [])
+    FUNCTIONS["interrupt"](ctx, [])
+    assert ctx.halted and ctx.interrupted
+    assert FUNCTIONS["dc"](ctx, []) == 7
+    assert FUNCTIONS["make-constant-symbol"](ctx, []) == "constant1"
+    assert FUNCTIONS["make-constant-symbol"](ctx, ["foo"]) == "foo2"
+
+
+def test_timestamp_shape() -> None:
+    stamp = call("timestamp")
+    assert len(stamp) == 23 and stamp[4] == "-" and stamp[19] == "."
+
+
+def test_format_value() -> None:
+    assert format_value(0.1) == "0.100000"
+    assert format_value(1e-7) == "0.000000"
+    assert format_value(Identifier("S", 1)) == "S1"
