@@ -23,6 +23,7 @@ from __future__ import annotations
 import dataclasses
 import re
 import sys
+import threading
 import warnings
 from collections.abc import Collection, Iterator
 from dataclasses import dataclass
@@ -30,14 +31,13 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-from lark import Lark, Token, Transformer, v_args
+from lark import Lark, Token, Transformer
 from lark.exceptions import (
     LarkError,
     UnexpectedCharacters,
     UnexpectedEOF,
     UnexpectedInput,
     UnexpectedToken,
-    VisitError,
 )
 
 from sann.soar.errors import SoarSemanticError, SoarSyntaxError, SoarWarning
@@ -115,16 +115,26 @@ class _BraceNewlines:
 
 
 @lru_cache(maxsize=1)
-def _parser() -> Lark:
-    """Build the LALR parser once per process (about 0.1 s); parsing then costs little."""
-    return Lark(
+def _parser() -> tuple[Lark, _ToDataclasses]:
+    """Build the LALR parser once per process (about 0.1 s).
+
+    The transformer runs inline, called by the parser at each reduction, so no parse tree is
+    ever built (twice as fast as transforming a tree). Its per-parse state is reset by
+    `parse` under `_LOCK`, which makes parsing thread-safe.
+    """
+    transformer = _ToDataclasses()
+    parser = Lark(
         GRAMMAR_PATH.read_text(encoding="utf-8"),
         parser="lalr",
         lexer="contextual",
         postlex=_BraceNewlines(),
-        propagate_positions=True,
+        transformer=transformer,
         maybe_placeholders=False,
     )
+    return parser, transformer
+
+
+_LOCK = threading.Lock()
 
 
 # ----------------------------------------------------------------- intermediate structures
@@ -182,15 +192,28 @@ def _unescape(body: str) -> str:
     return re.sub(r"\\(.)", r"\1", body, flags=re.S)
 
 
+def _argument(item: str) -> str:
+    """A command argument as plain text: a word, a "string" unquoted, or a {braced} group."""
+    if isinstance(item, Token) and item.type == "DQSTRING":
+        return _unescape(item[1:-1])
+    return str(item)
+
+
 class _ToDataclasses(Transformer):
     """Lark tree -> production dataclasses, one small method per grammar rule."""
 
-    def __init__(self, text: str, file: str, functions: Collection[str]) -> None:
+    def __init__(self) -> None:
         super().__init__()
+        self.reset("", "<string>", KNOWN_RHS_FUNCTIONS)
+
+    def reset(self, text: str, file: str, functions: Collection[str]) -> None:
+        """Start a new parse (the instance is shared: see `_parser`)."""
         self.text = text
         self.file = file
         self.functions = functions
         self._fresh = 0
+        self._placeholders: list[str] = []  # this production's fresh variables, in order
+        self._used: set[str] = set()  # this production's own variable names
         self._warnings: list[str] = []  # this production's, until its name is known
         self.warnings: list[str] = []  # issued by `parse` to its caller
 
@@ -198,7 +221,9 @@ class _ToDataclasses(Transformer):
 
     def _placeholder(self, letter: str) -> Var:
         self._fresh += 1
-        return Var(f"{_PLACEHOLDER}{self._fresh:08d}{letter}")
+        name = f"{_PLACEHOLDER}{self._fresh}{_PLACEHOLDER}{letter}"
+        self._placeholders.append(name)
+        return Var(name)
 
     def _syntax_error(self, message: str, line: int, column: int) -> SoarSyntaxError:
         return _syntax_error(self.text, self.file, message, line, column)
@@ -213,26 +238,21 @@ class _ToDataclasses(Transformer):
 
     def command(self, items: list) -> Command:
         name, *args = items
-        return Command(str(name), tuple(args), self._location(name))
+        return Command(str(name), tuple(_argument(arg) for arg in args), self._location(name))
 
     def shell_command(self, items: list) -> None:
         name = items[0]
         raise self._syntax_error(f"'{name}' is refused: {_REFUSAL}", name.line, name.column)
 
-    @v_args(meta=True)
-    def braced(self, meta: Any, items: list) -> str:
-        return self.text[meta.start_pos : meta.end_pos]
-
-    def WORD(self, token: Token) -> str:  # noqa: N802 - Lark names terminal callbacks so
-        return str(token)
-
-    def DQSTRING(self, token: Token) -> str:  # noqa: N802
-        return _unescape(token[1:-1])
+    def braced(self, items: list) -> str:
+        return self.text[items[0].start_pos : items[-1].end_pos]
 
     # -- constants and tests
 
     def variable(self, items: list) -> Var:
-        return Var(items[0][1:-1])
+        name = items[0][1:-1]
+        self._used.add(name)
+        return Var(name)
 
     def symbol(self, items: list) -> Const:
         return Const(str(items[0]))
@@ -278,8 +298,9 @@ class _ToDataclasses(Transformer):
         path, *values = items[1:] if negated else items
         return _AttrValueTests(negated, path, tuple(values))
 
-    @v_args(meta=True)
-    def conds_for_one_id(self, meta: Any, items: list) -> list[ConditionElement]:
+    def conds_for_one_id(self, items: list) -> list[ConditionElement]:
+        close = items.pop()
+        del items[0]
         goal = items.pop(0).keyword if items and isinstance(items[0], _Goal) else None
         has_id = bool(items) and not isinstance(items[0], _AttrValueTests)
         id_test = items.pop(0) if has_id else self._placeholder("i" if goal == "impasse" else "s")
@@ -287,8 +308,8 @@ class _ToDataclasses(Transformer):
             raise self._syntax_error(
                 f"expected an attribute test after '({goal}': add one such as "
                 "'^type state' or '^superstate nil'",
-                meta.end_line,
-                meta.end_column - 1,
+                close.line,
+                close.column,
             )
         elements: list[ConditionElement] = []
         for avt in items:
@@ -430,7 +451,7 @@ class _ToDataclasses(Transformer):
         return token
 
     def doc(self, items: list) -> tuple[str]:
-        return (items[0],)  # already unescaped by DQSTRING
+        return (_unescape(items[0][1:-1]),)
 
     def flag(self, items: list) -> str:
         return str(items[0])[1:]
@@ -450,7 +471,15 @@ class _ToDataclasses(Transformer):
         production = Production(
             name, tuple(conditions), tuple(actions), doc, tuple(flags), self._location(sp)
         )
-        production = _name_placeholders(production)
+        if self._placeholders:
+            names = _fresh_names(self._placeholders, self._used)
+            production = dataclasses.replace(
+                production,
+                conditions=tuple(_rename_element(c, names) for c in production.conditions),
+                actions=tuple(_rename_action(a, names) for a in production.actions),
+            )
+        self._placeholders.clear()
+        self._used.clear()
         _check_production(production, self.functions)
         self.warnings.extend(_where(production) + message for message in self._warnings)
         self._warnings.clear()
@@ -488,53 +517,80 @@ def _negate(elements: list[ConditionElement]) -> list[ConditionElement]:
     return [ConjunctiveNegation(tuple(elements))] if elements else []
 
 
-def _walk(value: object) -> Iterator[object]:
-    """Every dataclass instance and leaf inside a production, depth first, in order."""
-    yield value
-    if isinstance(value, tuple):
-        for item in value:
-            yield from _walk(item)
-    elif dataclasses.is_dataclass(value) and not isinstance(value, type):
-        for f in dataclasses.fields(value):
-            if f.name != "location":
-                yield from _walk(getattr(value, f.name))
+def _calls(value: object) -> Iterator[FuncCall]:
+    """Every function call in an action or RHS value, outermost first."""
+    if isinstance(value, CallAction):
+        yield from _calls(value.call)
+    elif isinstance(value, MakeAction):
+        for part in (value.attr, value.value, value.referent):
+            yield from _calls(part)
+    elif isinstance(value, FuncCall):
+        yield value
+        for arg in value.args:
+            yield from _calls(arg)
 
 
-def _rename(value: Any, names: dict[str, str]) -> Any:
-    if isinstance(value, Var):
-        return Var(names.get(value.name, value.name))
-    if isinstance(value, tuple):
-        return tuple(_rename(item, names) for item in value)
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        changes = {
-            f.name: _rename(getattr(value, f.name), names)
-            for f in dataclasses.fields(value)
-            if f.name != "location"
-        }
-        return dataclasses.replace(value, **changes)
-    return value
-
-
-def _name_placeholders(production: Production) -> Production:
-    """Give fresh variables the kernel's names: ``<letter*n>``, n counting per letter from 1
+def _fresh_names(placeholders: list[str], used: set[str]) -> dict[str, str]:
+    """The kernel's names for fresh variables: ``<letter*n>``, n counting per letter from 1
     in creation order and skipping names the production already uses."""
-    placeholders, used = set(), set()
-    for item in _walk((production.conditions, production.actions)):
-        if isinstance(item, Var):
-            (placeholders if item.name.startswith(_PLACEHOLDER) else used).add(item.name)
-    if not placeholders:
-        return production
     counters: dict[str, int] = {}
     names: dict[str, str] = {}
-    for placeholder in sorted(placeholders):
-        letter = placeholder[9:]
+    for placeholder in placeholders:
+        letter = placeholder.rsplit(_PLACEHOLDER, 1)[1]
         while True:
             counters[letter] = counters.get(letter, 0) + 1
             candidate = f"{letter}*{counters[letter]}"
             if candidate not in used:
                 break
         names[placeholder] = candidate
-    return _rename(production, names)
+    return names
+
+
+# Renaming is written out per type: it runs on most productions (every path and missing value
+# makes a placeholder), and a generic walk over dataclass fields costs several times more.
+
+
+def _rename_test(test: Test, names: dict[str, str]) -> Test:
+    if isinstance(test, Var):
+        return Var(names[test.name]) if test.name in names else test
+    if isinstance(test, Conjunction):
+        return Conjunction(tuple(_rename_test(t, names) for t in test.tests))
+    if isinstance(test, Relational) and isinstance(test.operand, Var):
+        return Relational(test.op, _rename_test(test.operand, names))  # type: ignore[arg-type]
+    return test
+
+
+def _rename_element(element: ConditionElement, names: dict[str, str]) -> ConditionElement:
+    if isinstance(element, ConjunctiveNegation):
+        return ConjunctiveNegation(tuple(_rename_element(c, names) for c in element.conditions))
+    return Condition(
+        _rename_test(element.id_test, names),
+        _rename_test(element.attr_test, names),
+        _rename_test(element.value_test, names),
+        element.negated,
+        element.acceptable,
+        element.goal,
+    )
+
+
+def _rename_value(value: Any, names: dict[str, str]) -> Any:
+    if isinstance(value, Var):
+        return Var(names[value.name]) if value.name in names else value
+    if isinstance(value, FuncCall):
+        return FuncCall(value.name, tuple(_rename_value(a, names) for a in value.args))
+    return value
+
+
+def _rename_action(action: Action, names: dict[str, str]) -> Action:
+    if isinstance(action, CallAction):
+        return CallAction(_rename_value(action.call, names))
+    return MakeAction(
+        _rename_value(action.id, names),
+        _rename_value(action.attr, names),
+        _rename_value(action.value, names),
+        action.preference,
+        _rename_value(action.referent, names),
+    )
 
 
 # ----------------------------------------------------------------------- semantic checks
@@ -549,9 +605,9 @@ def _check_production(production: Production, functions: Collection[str]) -> Non
             "part of this engine",
             production.location,
         )
-    for item in _walk(production.actions):
-        if isinstance(item, FuncCall):
-            _check_function(production, item, functions)
+    for action in production.actions:
+        for call in _calls(action):
+            _check_function(production, call, functions)
     _check_grounded(production)
     _check_binary_preferences(production)
 
@@ -611,10 +667,9 @@ def _check_grounded(production: Production) -> None:
 def _ungrounded(action: Action, grounded: set[str]) -> list[str]:
     if isinstance(action, MakeAction) and action.id.name not in grounded:
         return [action.id.name]
-    calls = [item for item in _walk(action) if isinstance(item, FuncCall)]
     return [
         arg.name
-        for call in calls
+        for call in _calls(action)
         for arg in call.args
         if isinstance(arg, Var) and arg.name not in grounded
     ]
@@ -737,24 +792,22 @@ def parse(
     SoarSyntaxError (with file, line, column) or SoarSemanticError (naming the production);
     the first error stops the parse, as in the kernel.
     """
-    parser = _parser()
-    try:
-        tree = parser.parse(text)
-    except (UnexpectedToken, UnexpectedCharacters, UnexpectedEOF) as error:
-        raise _from_lark(error, text, file) from None
-    except LarkError as error:  # defensive: any other Lark failure still gets a position
-        line, column = _end_position(text)
-        raise _syntax_error(text, file, f"cannot parse: {error}", line, column) from None
-    transformer = _ToDataclasses(text, file, functions)
-    try:
-        return transformer.transform(tree)
-    except VisitError as error:
-        if isinstance(error.orig_exc, SoarSyntaxError | SoarSemanticError):
-            raise error.orig_exc from None
-        raise
-    finally:
-        for message in transformer.warnings:
-            warnings.warn(message, SoarWarning, stacklevel=_caller_stacklevel())
+    parser, transformer = _parser()
+    with _LOCK:
+        transformer.reset(text, file, functions)
+        try:
+            return parser.parse(text)
+        except (UnexpectedToken, UnexpectedCharacters, UnexpectedEOF) as error:
+            raise _from_lark(error, text, file) from None
+        except (SoarSyntaxError, SoarSemanticError):
+            raise
+        except LarkError as error:  # defensive: any other Lark failure still gets a position
+            line, column = _end_position(text)
+            raise _syntax_error(text, file, f"cannot parse: {error}", line, column) from None
+        finally:
+            pending, transformer.warnings = transformer.warnings, []
+            for message in pending:
+                warnings.warn(message, SoarWarning, stacklevel=_caller_stacklevel())
 
 
 def parse_file(path: str | Path, functions: Collection[str] = KNOWN_RHS_FUNCTIONS) -> list:
