@@ -1,0 +1,270 @@
+"""Run ``rules/blocks.soar`` on block scenes, in our engine or in the real Soar kernel.
+
+One driver serves both engines: the scene goes onto the input-link through the engine's own
+API (``sann.soar.Agent.input_link`` handles, or ``soar_sml`` ``Create*WME`` calls), the agent
+runs until it halts, and the sequences are read back from the output-link. The input-link
+schema is documented at the top of the rule file.
+
+What the rules see is exactly what the networks see: the Table-1 feature rows (observed
+positions, size, id and the six noisy neighbour ids); they never see the true geometry.
+
+Speed. One agent is reused across scenes; between runs its working memory is reset with
+``init-soar`` (``agent.init()`` in ours). Plans of different targets never interact, so the
+targets of a scene can be planned in one run or in several: the sequences are the same. The
+real kernel gets slower than linearly with the number of live plans in one run (its P-node
+bookkeeping scans a production's pending matches), so the driver plans a few targets per run
+there (``targets_per_run``; the scene stays on the input-link meanwhile).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+from .blocks import FEATURE_NAMES, NAMES, SIDES, Scene, features
+
+ENGINES = ("sann", "soar_sml")
+DEFAULT_RULES = Path(__file__).resolve().parents[2] / "rules" / "blocks.soar"
+DEFAULT_CAP = 8
+DEFAULT_HORIZON = 8
+_COL = {name: i for i, name in enumerate(FEATURE_NAMES)}
+_SIDE_COLS = [_COL[s.capitalize()] for s in SIDES]
+
+
+class PlanSequence(NamedTuple):
+    """One logical sequence: grasp the blocks of ``order`` (names) in turn; the last is the
+    target, so ``t_o == len(order)``. ``pair`` is the side pair of the target's grasp."""
+
+    target: int
+    pair: str
+    t_o: int
+    order: str
+
+
+@dataclass(frozen=True)
+class PlannerConfig:
+    """``cap``: most sequences per target; ``horizon``: largest T_o a plan may reach."""
+
+    engine: str = "sann"
+    rules: str | os.PathLike[str] = DEFAULT_RULES
+    cap: int = DEFAULT_CAP
+    horizon: int = DEFAULT_HORIZON
+    targets_per_run: int | None = None  # None: the engine's best (all in ours, 3 in soar_sml)
+
+    def __post_init__(self) -> None:
+        if self.engine not in ENGINES:
+            raise ValueError(f"engine must be one of {ENGINES}, got {self.engine!r}")
+        for name in ("cap", "horizon"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
+        tpr = self.targets_per_run
+        if tpr is not None and (isinstance(tpr, bool) or not isinstance(tpr, int) or tpr < 1):
+            raise ValueError(f"targets_per_run must be an integer >= 1 or None, got {tpr!r}")
+        if not Path(self.rules).is_file():
+            raise ValueError(f"rules file not found: {self.rules}")
+
+
+def _block_rows(feats: np.ndarray) -> list[tuple]:
+    """(id, name, size, x, y, z, [(side, neighbour id) ...]) per feature row."""
+    feats = np.asarray(feats, dtype=np.float64)
+    if feats.ndim != 2 or feats.shape[1] != len(FEATURE_NAMES):
+        raise ValueError(f"features must be an (n, {len(FEATURE_NAMES)}) array, "
+                         f"got shape {feats.shape}")
+    rows = []
+    for f in feats:
+        bid = int(f[_COL["Target"]])
+        if not 1 <= bid <= len(NAMES):
+            raise ValueError(f"block id {bid} is not in 1..{len(NAMES)}")
+        rel = [(side, int(f[c])) for side, c in zip(SIDES, _SIDE_COLS, strict=True) if f[c]]
+        rows.append((bid, NAMES[bid - 1], int(f[_COL["Size"]]), float(f[0]), float(f[1]),
+                     float(f[2]), rel))
+    return rows
+
+
+class _SannBackend:
+    """Our engine: a fresh working memory per run via ``agent.init()``."""
+
+    default_group = 26
+
+    def __init__(self, rules: Path) -> None:
+        from sann.soar.agent import Agent
+
+        self.agent = Agent()
+        self.agent.source(str(rules))
+
+    def run(self, rows: list[tuple], targets: Sequence[int], cap: int, horizon: int
+            ) -> list[PlanSequence]:
+        agent = self.agent
+        agent.init()
+        il = agent.input_link
+        il.add("cap", cap)
+        il.add("horizon", horizon)
+        for t in targets:
+            il.add("target", int(t))
+        for bid, name, size, x, y, z, rel in rows:
+            b = il.add("block")
+            b.add("id", bid)
+            b.add("name", name)
+            b.add("size", size)
+            b.add("x", x)
+            b.add("y", y)
+            b.add("z", z)
+            for side, other in rel:
+                b.add(side, other)
+        agent.run()
+        out = []
+        for attr, q in agent.output_link.children():
+            if attr == "sequence":
+                kv = dict(q.children())
+                out.append(PlanSequence(int(kv["target"]), str(kv["pair"]), int(kv["t-o"]),
+                                        str(kv["order"])))
+        return out
+
+    def close(self) -> None:
+        self.agent = None
+
+
+class _SmlBackend:
+    """The real Soar kernel through soar_sml: the scene stays on the input-link while groups of
+    targets are planned; ``init-soar`` between groups (SML re-sends the input-link)."""
+
+    default_group = 3
+
+    def __init__(self, rules: Path) -> None:
+        import soar_sml as sml
+
+        self.kernel = sml.Kernel.CreateKernelInCurrentThread(True, 0)
+        self.agent = self.kernel.CreateAgent(f"blocks{id(self)}")
+        result = self.agent.ExecuteCommandLine(f"source {{{rules}}}")
+        if not self.agent.GetLastCommandLineResult():
+            raise RuntimeError(f"soar_sml could not source {rules}: {result}")
+        self.agent.ExecuteCommandLine("watch 0")
+
+    def put_scene(self, rows: list[tuple], cap: int, horizon: int) -> list:
+        a, il = self.agent, self.agent.GetInputLink()
+        top = [a.CreateIntWME(il, "cap", cap), a.CreateIntWME(il, "horizon", horizon)]
+        for bid, name, size, x, y, z, rel in rows:
+            b = a.CreateIdWME(il, "block")
+            top.append(b)
+            a.CreateIntWME(b, "id", bid)
+            a.CreateStringWME(b, "name", name)
+            a.CreateIntWME(b, "size", size)
+            a.CreateFloatWME(b, "x", x)
+            a.CreateFloatWME(b, "y", y)
+            a.CreateFloatWME(b, "z", z)
+            for side, other in rel:
+                a.CreateIntWME(b, side, other)
+        return top
+
+    def run_group(self, targets: Sequence[int]) -> list[PlanSequence]:
+        a = self.agent
+        il = a.GetInputLink()
+        wmes = [a.CreateIntWME(il, "target", int(t)) for t in targets]
+        a.Commit()
+        a.RunSelf(100_000)
+        out = []
+        ol = a.GetOutputLink()
+        if ol is not None:
+            for i in range(ol.GetNumberChildren()):
+                child = ol.GetChild(i)
+                if child.GetAttribute() != "sequence":
+                    continue
+                q = child.ConvertToIdentifier()
+                out.append(PlanSequence(int(q.GetParameterValue("target")),
+                                        q.GetParameterValue("pair"),
+                                        int(q.GetParameterValue("t-o")),
+                                        q.GetParameterValue("order")))
+        for w in wmes:
+            a.DestroyWME(w)
+        a.ExecuteCommandLine("init-soar")
+        return out
+
+    def clear(self, top: list) -> None:
+        for w in top:
+            self.agent.DestroyWME(w)
+        self.agent.Commit()
+
+    def close(self) -> None:
+        if self.kernel is not None:
+            self.kernel.DestroyAgent(self.agent)
+            self.kernel.Shutdown()
+            self.kernel = None
+
+
+class Planner:
+    """A reusable planner: one agent, many scenes.
+
+    ``plan(feats, targets)`` returns ``{target id: [PlanSequence, ...]}`` with every target
+    present (an empty list when no plan reached the target), sequences sorted by (pair, T_o,
+    order) so that both engines give equal results.
+    """
+
+    def __init__(self, config: PlannerConfig | None = None, **kwargs: object) -> None:
+        self.config = config or PlannerConfig(**kwargs)  # type: ignore[arg-type]
+        rules = Path(self.config.rules)
+        self._backend = (_SannBackend(rules) if self.config.engine == "sann"
+                         else _SmlBackend(rules))
+        self.group = self.config.targets_per_run or self._backend.default_group
+
+    def plan(self, feats: np.ndarray, targets: Iterable[int] | None = None
+             ) -> dict[int, list[PlanSequence]]:
+        rows = _block_rows(feats)
+        ids = [r[0] for r in rows]
+        if len(set(ids)) != len(ids):
+            raise ValueError("block ids in a scene must be unique")
+        wanted = ids if targets is None else [int(t) for t in targets]
+        missing = sorted(set(wanted) - set(ids))
+        if missing:
+            raise ValueError(f"targets {missing} are not blocks of the scene")
+        cfg = self.config
+        found: list[PlanSequence] = []
+        if isinstance(self._backend, _SmlBackend):
+            top = self._backend.put_scene(rows, cfg.cap, cfg.horizon)
+            for g in range(0, len(wanted), self.group):
+                found += self._backend.run_group(wanted[g:g + self.group])
+            self._backend.clear(top)
+        else:
+            for g in range(0, len(wanted), self.group):
+                found += self._backend.run(rows, wanted[g:g + self.group], cfg.cap, cfg.horizon)
+        result: dict[int, list[PlanSequence]] = {t: [] for t in wanted}
+        for seq in found:
+            result[seq.target].append(seq)
+        return {t: sorted(v, key=lambda s: (s.pair, s.t_o, s.order)) for t, v in result.items()}
+
+    def close(self) -> None:
+        self._backend.close()
+
+    def __enter__(self) -> Planner:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def plan_scene(
+    scene: Scene | np.ndarray,
+    targets: Iterable[int] | None = None,
+    engine: str = "sann",
+    rules: str | os.PathLike[str] = DEFAULT_RULES,
+    cap: int = DEFAULT_CAP,
+    horizon: int = DEFAULT_HORIZON,
+) -> dict[int, list[PlanSequence]]:
+    """Plan one scene: ``{target id: sequences}``.
+
+    ``scene`` is a Scene (planned on its true features, no noise) or an (n, 13) array of
+    Table-1 feature rows. ``targets``: block ids, default every block.
+    """
+    feats = features(scene) if isinstance(scene, Scene) else np.asarray(scene)
+    with Planner(PlannerConfig(engine=engine, rules=rules, cap=cap, horizon=horizon)) as p:
+        return p.plan(feats, targets)
+
+
+def t_o_lists(plans: dict[int, list[PlanSequence]]) -> dict[int, list[int]]:
+    """``{target: [T_o of each sequence]}``, the input of :func:`sann.fusion.logical_item`."""
+    return {t: [s.t_o for s in seqs] for t, seqs in plans.items()}
