@@ -211,13 +211,16 @@ class Agent:
             self.excise(name)
 
     def init(self) -> None:
-        """``init-soar``: clear working memory and counters, keep the rules, rebuild S1."""
-        productions = [info.production for info in self._productions.values()]
-        self.matcher = self._matcher_class()
-        self._productions = {}
+        """``init-soar``: clear working memory and counters, keep the rules, rebuild S1.
+
+        The matcher is kept (only its working memory is emptied), as the kernel keeps its
+        Rete, so re-initialising between problems costs the WMEs, not the rules."""
+        for wme in list(self._wm.values()):
+            self.matcher.remove_wme(wme)
+        self.matcher.take_changes()
+        for info in self._productions.values():
+            info.firings = 0
         self._build()
-        for production in productions:
-            self.add_production(production)
 
     def run(self, decisions: int | None = None) -> dict[str, int]:
         """Run until halt or interrupt, or until ``decisions`` more decisions were made."""
