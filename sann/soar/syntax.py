@@ -68,6 +68,7 @@ __all__ = [
     "REFUSED_RHS_FUNCTIONS",
     "parse",
     "parse_file",
+    "parse_partial",
     "parse_production",
 ]
 
@@ -216,6 +217,7 @@ class _ToDataclasses(Transformer):
         self._used: set[str] = set()  # this production's own variable names
         self._warnings: list[str] = []  # this production's, until its name is known
         self.warnings: list[str] = []  # issued by `parse` to its caller
+        self.completed: list[Production | Command] = []  # for `parse_partial` on an error
 
     # -- helpers
 
@@ -238,7 +240,9 @@ class _ToDataclasses(Transformer):
 
     def command(self, items: list) -> Command:
         name, *args = items
-        return Command(str(name), tuple(_argument(arg) for arg in args), self._location(name))
+        command = Command(str(name), tuple(_argument(arg) for arg in args), self._location(name))
+        self.completed.append(command)
+        return command
 
     def shell_command(self, items: list) -> None:
         name = items[0]
@@ -483,6 +487,7 @@ class _ToDataclasses(Transformer):
         _check_production(production, self.functions)
         self.warnings.extend(_where(production) + message for message in self._warnings)
         self._warnings.clear()
+        self.completed.append(production)
         return production
 
 
@@ -792,20 +797,38 @@ def parse(
     SoarSyntaxError (with file, line, column) or SoarSemanticError (naming the production);
     the first error stops the parse, as in the kernel.
     """
+    items, error = parse_partial(text, file, functions)
+    if error is not None:
+        raise error
+    return items
+
+
+def parse_partial(
+    text: str, file: str = "<string>", functions: Collection[str] = KNOWN_RHS_FUNCTIONS
+) -> tuple[list[Production | Command], SoarSyntaxError | SoarSemanticError | None]:
+    """Parse up to the first error: the items complete before it, and the error (or None).
+
+    This is what the kernel does with a file: everything before the first error is loaded,
+    then the error is reported. (An item counts as complete once the parser has seen the
+    token after it, so text right after a closing brace that cannot even be lexed also
+    withholds that production.)
+    """
     parser, transformer = _parser()
     with _LOCK:
         transformer.reset(text, file, functions)
         try:
-            return parser.parse(text)
+            return parser.parse(text), None
         except (UnexpectedToken, UnexpectedCharacters, UnexpectedEOF) as error:
-            raise _from_lark(error, text, file) from None
-        except (SoarSyntaxError, SoarSemanticError):
-            raise
+            return transformer.completed, _from_lark(error, text, file)
+        except (SoarSyntaxError, SoarSemanticError) as error:
+            return transformer.completed, error
         except LarkError as error:  # defensive: any other Lark failure still gets a position
             line, column = _end_position(text)
-            raise _syntax_error(text, file, f"cannot parse: {error}", line, column) from None
+            message = f"cannot parse: {error}"
+            return transformer.completed, _syntax_error(text, file, message, line, column)
         finally:
             pending, transformer.warnings = transformer.warnings, []
+            transformer.completed = []
             for message in pending:
                 warnings.warn(message, SoarWarning, stacklevel=_caller_stacklevel())
 

@@ -24,7 +24,13 @@ from sann.soar.production import (
     Relational,
     Var,
 )
-from sann.soar.syntax import KNOWN_RHS_FUNCTIONS, parse, parse_file, parse_production
+from sann.soar.syntax import (
+    KNOWN_RHS_FUNCTIONS,
+    parse,
+    parse_file,
+    parse_partial,
+    parse_production,
+)
 
 ROOT = Path(__file__).resolve().parents[2]
 S = Var("s")
@@ -511,6 +517,20 @@ def test_semantic_errors_name_the_production(text: str, words: list[str]) -> Non
         assert word in message
 
 
+def test_parse_partial_returns_what_precedes_the_first_error() -> None:
+    good = "watch 1\nsp {p (state <s> ^a b) --> }\n"
+    for bad, kind in [
+        ("sp {q (state <s> ^a b) -> }\n", SoarSyntaxError),
+        ("sp {q (state <s> ^a b) --> (foo)}\n", SoarSemanticError),
+        ("exec rm -rf /\n", SoarSyntaxError),
+    ]:
+        items, error = parse_partial(good + bad + "echo never\n", "h.soar")
+        assert [getattr(i, "name", None) for i in items] == ["watch", "p"]
+        assert isinstance(error, kind) and "h.soar:3" in str(error)
+    items, error = parse_partial(good)
+    assert error is None and len(items) == 2
+
+
 def test_first_error_stops_the_file() -> None:
     with pytest.raises(SoarSyntaxError) as info:
         parse("sp {p (state <s> ^a b) --> }\nsp {q (state <s> ^a) -> }\nsp {r oops}")
@@ -651,3 +671,32 @@ def test_the_kernel_also_refuses_identifier_like_names() -> None:
         assert not _kernel_accepts(kernel, "sp {t1 (state <s> ^a b) --> (write hi)}")
         assert _kernel_accepts(kernel, "sp {|t1| (state <s> ^a b) --> (write hi)}")
     assert _we_accept("sp {|t1| (state <s> ^a b) --> (write hi)}")
+
+
+# ------------------------------------------------------------------------- the Pygments lexer
+
+
+def test_highlighting_lexer_covers_every_rule_file_without_errors() -> None:
+    from pygments.token import Error
+
+    from sann.soar.lexer import SoarLexer
+
+    for path in _rule_files():
+        text = path.read_text(encoding="utf-8")
+        tokens = list(SoarLexer().get_tokens(text))
+        assert "".join(value for _, value in tokens).rstrip("\n") == text.rstrip("\n")
+        assert not [value for kind, value in tokens if kind in Error], path
+
+
+def test_highlighting_lexer_token_kinds() -> None:
+    from pygments.token import Comment, Keyword, Name, Number, Operator, String
+
+    from sann.soar.lexer import SoarLexer
+
+    text = 'sp {a*b "doc" (state <s> ^a.b <x> -^c |x y| ^d 1.5) # note\n--> (<s> ^e (+ 1 2) >)}'
+    kinds = {value: kind for kind, value in SoarLexer().get_tokens(text) if value.strip()}
+    assert kinds["sp"] in Keyword and kinds["state"] in Keyword and kinds["-->"] in Keyword
+    assert kinds["a*b"] in Name.Function and kinds['"doc"'] in String.Doc
+    assert kinds["<s>"] in Name.Variable and kinds["b"] in Name.Attribute
+    assert kinds["|x y|"] in String and kinds["1.5"] in Number.Float
+    assert kinds["# note"] in Comment and kinds[">"] in Operator and kinds["+"] in Name.Builtin
