@@ -22,6 +22,7 @@ Matching follows the real Soar 9.6 kernel (checked with ``soar_sml``):
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator
+from operator import attrgetter
 
 from sann.soar.errors import SoarSemanticError
 from sann.soar.memory import WME, Identifier, Symbol
@@ -226,7 +227,7 @@ def _validate_test(production: Production, test: Test) -> None:
 
 def _check_scope(
     production: Production, elements: tuple[ConditionElement, ...], outer_linked: set[str],
-    outer_bound: set[str],
+    outer_bound: set[str], links: bool,
 ) -> None:
     """Check linkage and bound relational variables of one scope (the production, or the
     inside of a conjunctive negation, whose own positive conditions bind local variables)."""
@@ -250,13 +251,13 @@ def _check_scope(
             if not element.conditions:
                 raise SoarSemanticError(production.name, "empty conjunctive negation -{ }",
                                         production.location)
-            _check_scope(production, element.conditions, linked, bound)
+            _check_scope(production, element.conditions, linked, bound, links)
             continue
-        _check_condition(production, element, linked, bound)
+        _check_condition(production, element, linked, bound, links)
 
 
 def _check_condition(
-    production: Production, cond: Condition, linked: set[str], bound: set[str]
+    production: Production, cond: Condition, linked: set[str], bound: set[str], links: bool
 ) -> None:
     name = production.name
     for test in _fields(cond):
@@ -265,7 +266,7 @@ def _check_condition(
     if not ids:
         raise SoarSemanticError(name, f"the identifier of condition {_show(cond)} must be a "
                                 "variable", production.location)
-    if not linked.intersection(ids):
+    if links and not linked.intersection(ids):
         raise SoarSemanticError(name, f"condition {_show(cond)} is not linked to a state: "
                                 f"<{ids[0]}> is not reachable from a state or impasse "
                                 "condition", production.location)
@@ -298,7 +299,7 @@ def _show(cond: Condition) -> str:
             f"{text(cond.value_test)}{plus})")
 
 
-def check_production(production: Production) -> None:
+def check_production(production: Production, links: bool = True) -> None:
     """Raise :class:`SoarSemanticError` naming the production when it cannot be matched.
 
     The first condition must be a positive ``state``/``impasse`` condition, every
@@ -312,7 +313,7 @@ def check_production(production: Production) -> None:
     if not isinstance(first, Condition) or first.negated or first.goal is None:
         raise SoarSemanticError(production.name, "the first condition must test a state: "
                                 "(state <s> ...) or (impasse <s> ...)", production.location)
-    _check_scope(production, conditions, set(), set())
+    _check_scope(production, conditions, set(), set(), links)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -494,5 +495,1013 @@ class BruteForceMatcher:
             self._current[name] = new
 
 
-#: Until the Rete lands, the brute-force matcher serves under its name (same interface).
-Rete = BruteForceMatcher
+# ---------------------------------------------------------------------------------------------
+# The Rete (Doorenbos 1995)
+# ---------------------------------------------------------------------------------------------
+#
+# Tokens carry a flat tuple ``vals`` of the variable values bound so far (one slot per binding
+# join), so that a join test or a hash key is one tuple index.  Every beta node keeps its own
+# output memory (``tokens``) and, on demand, hash indices of it on the value positions its
+# children join on; alpha memories keep hash indices on the WME fields their join nodes test.
+# Removal is tree-based: each WME knows its alpha memories, the tokens built on it and the
+# negative-node tokens it blocks; each token knows its children.
+
+_FLOAT = object()  # hash keys of floats are (_FLOAT, x): 1.0 must never meet 1 in a join
+_ANY = object()  # alpha index: no constant test on this field
+_IDENT = object()  # alpha cache: any identifier
+_FIELDS = ("id", "attr", "value")
+_GET = {name: attrgetter(name) for name in _FIELDS}
+_INDEX_PREFERENCE = {"id": 0, "value": 1, "attr": 2}
+_ALPHA_CACHE_LIMIT = 100_000
+
+Ref = tuple[str, object]  # ("v", position in vals) or ("w", field of the current WME)
+BetaSpec = tuple[Ref, str, Ref]
+
+
+def _hkey(value: object) -> object:
+    return (_FLOAT, value) if value.__class__ is float else value
+
+
+def _typed(value: object) -> tuple[str, object]:
+    """A constant inside a sharing key: 1, 1.0 and "1" must give different keys."""
+    return (value.__class__.__name__, value)
+
+
+def _index_add(index: dict, key: object, item: object) -> None:
+    bucket = index.get(key)
+    if bucket is None:
+        index[key] = {item: None}
+    else:
+        bucket[item] = None
+
+
+def _index_remove(index: dict, key: object, item: object) -> None:
+    bucket = index[key]
+    del bucket[item]
+    if not bucket:
+        del index[key]
+
+
+class _Token:
+    """A partial match.  ``extra`` depends on the node: the blocking WMEs of a negative-node
+    token, the results of an NCC owner, the owner of an NCC partner result, the Match of a
+    production-node token."""
+
+    __slots__ = ("parent", "wme", "vals", "node", "children", "extra")
+
+    def __init__(self, parent: _Token | None, wme: WME | None, vals: tuple, node: object) -> None:
+        self.parent = parent
+        self.wme = wme
+        self.vals = vals
+        self.node = node
+        self.children: dict[_Token, None] | None = None
+        self.extra: object = None
+
+
+def _adopt(parent: _Token, tok: _Token) -> None:
+    children = parent.children
+    if children is None:
+        parent.children = {tok: None}
+    else:
+        children[tok] = None
+
+
+class _AlphaMemory:
+    """The WMEs that pass one condition's constant tests, with hash indices on the fields
+    the join nodes below test."""
+
+    __slots__ = ("key", "lookup", "accept", "wmes", "indexes", "index_list", "successors")
+
+    def __init__(self, key: tuple, lookup: tuple, accept: Callable[[WME], bool] | None) -> None:
+        self.key = key
+        self.lookup = lookup
+        self.accept = accept
+        self.wmes: dict[WME, None] = {}
+        self.indexes: dict[str, dict] = {}
+        self.index_list: list[tuple[Callable, dict]] = []
+        self.successors: list[_Node] = []
+
+    def index(self, field: str) -> dict:
+        index = self.indexes.get(field)
+        if index is None:
+            index = {}
+            getter = _GET[field]
+            for wme in self.wmes:
+                _index_add(index, _hkey(getter(wme)), wme)
+            self.indexes[field] = index
+            self.index_list.append((getter, index))
+        return index
+
+    def add(self, wme: WME) -> None:
+        self.wmes[wme] = None
+        for getter, index in self.index_list:
+            key = getter(wme)
+            if key.__class__ is float:
+                key = (_FLOAT, key)
+            bucket = index.get(key)
+            if bucket is None:
+                index[key] = {wme: None}
+            else:
+                bucket[wme] = None
+
+    def remove(self, wme: WME) -> None:
+        del self.wmes[wme]
+        for getter, index in self.index_list:
+            _index_remove(index, _hkey(getter(wme)), wme)
+
+
+class _Node:
+    """A beta node with its memory of (active) output tokens and hash indices on it."""
+
+    __slots__ = ("rete", "parent", "key", "children", "child_map", "tokens", "indexes",
+                 "index_list")
+
+    def __init__(self, rete: Rete, parent: _Node | None, key: object = None) -> None:
+        self.rete = rete
+        self.parent = parent
+        self.key = key
+        self.children: list[_Node] = []
+        self.child_map: dict[object, _Node] = {}
+        self.tokens: dict[_Token, None] = {}
+        self.indexes: dict[int, dict] = {}
+        self.index_list: list[tuple[int, dict]] = []
+
+    def index(self, pos: int) -> dict:
+        index = self.indexes.get(pos)
+        if index is None:
+            index = {}
+            for tok in self.tokens:
+                _index_add(index, _hkey(tok.vals[pos]), tok)
+            self.indexes[pos] = index
+            self.index_list.append((pos, index))
+        return index
+
+    def store(self, tok: _Token) -> None:
+        """Add an active output token and pass it to the children."""
+        self.tokens[tok] = None
+        if self.index_list:
+            vals = tok.vals
+            for pos, index in self.index_list:
+                key = vals[pos]
+                if key.__class__ is float:
+                    key = (_FLOAT, key)
+                bucket = index.get(key)
+                if bucket is None:
+                    index[key] = {tok: None}
+                else:
+                    bucket[tok] = None
+        for child in self.children:
+            child.left_activate(tok)
+
+    def unstore(self, tok: _Token) -> None:
+        del self.tokens[tok]
+        if self.index_list:
+            vals = tok.vals
+            for pos, index in self.index_list:
+                _index_remove(index, _hkey(vals[pos]), tok)
+
+    def all_tokens(self) -> list[_Token]:
+        return list(self.tokens)
+
+    def forget(self, tok: _Token) -> None:
+        self.unstore(tok)
+
+    def left_activate(self, tok: _Token) -> None:  # the root has no parent
+        raise AssertionError("the root node is never activated")
+
+
+class _JoinNode(_Node):
+    """Joins parent tokens with the WMEs of an alpha memory, hashed on one equality test."""
+
+    __slots__ = ("amem", "pos", "getter", "amem_index", "parent_index", "check", "extend")
+
+    def __init__(self, rete: Rete, parent: _Node, key: object, amem: _AlphaMemory,
+                 index: tuple[int, str] | None, check: Callable | None,
+                 extend: Callable | None) -> None:
+        super().__init__(rete, parent, key)
+        self.amem = amem
+        self.check = check
+        self.extend = extend
+        if index is None:
+            self.pos = -1
+            self.getter = None
+            self.amem_index = None
+            self.parent_index = None
+        else:
+            self.pos, field = index
+            self.getter = _GET[field]
+            self.amem_index = amem.index(field)
+            self.parent_index = parent.index(self.pos)
+
+    def left_activate(self, t: _Token) -> None:
+        if self.pos >= 0:
+            key = t.vals[self.pos]
+            if key.__class__ is float:
+                key = (_FLOAT, key)
+            bucket = self.amem_index.get(key)
+            if bucket is None:
+                return
+        else:
+            bucket = self.amem.wmes
+        check = self.check
+        vals = t.vals
+        for wme in bucket:
+            if check is None or check(vals, wme):
+                self.emit(t, wme)
+
+    def right_activate(self, wme: WME) -> None:
+        if self.pos >= 0:
+            key = self.getter(wme)
+            if key.__class__ is float:
+                key = (_FLOAT, key)
+            bucket = self.parent_index.get(key)
+            if bucket is None:
+                return
+        else:
+            bucket = self.parent.tokens
+        check = self.check
+        for t in bucket:
+            if check is None or check(t.vals, wme):
+                self.emit(t, wme)
+
+    def emit(self, t: _Token, wme: WME) -> None:
+        extend = self.extend
+        tok = _Token(t, wme, t.vals if extend is None else extend(t.vals, wme), self)
+        children = t.children
+        if children is None:
+            t.children = {tok: None}
+        else:
+            children[tok] = None
+        info = self.rete._wme_info[wme]
+        built = info[1]
+        if built is None:
+            info[1] = {tok: None}
+        else:
+            built[tok] = None
+        self.store(tok)
+
+
+class _NegativeNode(_Node):
+    """Passes a parent token on while no WME of its alpha memory joins with it."""
+
+    __slots__ = ("amem", "pos", "getter", "amem_index", "check", "every", "every_index")
+
+    def __init__(self, rete: Rete, parent: _Node, key: object, amem: _AlphaMemory,
+                 index: tuple[int, str] | None, check: Callable | None) -> None:
+        super().__init__(rete, parent, key)
+        self.amem = amem
+        self.check = check
+        self.every: dict[_Token, None] = {}  # blocked and active tokens
+        self.every_index: dict = {}
+        if index is None:
+            self.pos = -1
+            self.getter = None
+            self.amem_index = None
+        else:
+            self.pos, field = index
+            self.getter = _GET[field]
+            self.amem_index = amem.index(field)
+
+    def all_tokens(self) -> list[_Token]:
+        return list(self.every)
+
+    def left_activate(self, t: _Token) -> None:
+        tok = _Token(t, None, t.vals, self)
+        _adopt(t, tok)
+        self.every[tok] = None
+        if self.pos >= 0:
+            key = _hkey(t.vals[self.pos])
+            _index_add(self.every_index, key, tok)
+            bucket = self.amem_index.get(key)
+        else:
+            bucket = self.amem.wmes
+        blockers = None
+        if bucket:
+            check = self.check
+            vals = t.vals
+            for wme in bucket:
+                if check is None or check(vals, wme):
+                    if blockers is None:
+                        blockers = {}
+                    blockers[wme] = None
+        if blockers is None:
+            self.store(tok)
+            return
+        tok.extra = blockers
+        info = self.rete._wme_info
+        for wme in blockers:
+            _block(info[wme], tok)
+
+    def right_activate(self, wme: WME) -> None:
+        if self.pos >= 0:
+            bucket = self.every_index.get(_hkey(self.getter(wme)))
+            if bucket is None:
+                return
+        else:
+            bucket = self.every
+        check = self.check
+        info = self.rete._wme_info[wme]
+        for tok in bucket:
+            if check is None or check(tok.vals, wme):
+                blockers = tok.extra
+                if blockers is None:
+                    tok.extra = {wme: None}
+                    self.unstore(tok)
+                    self.rete._delete_children(tok)
+                else:
+                    blockers[wme] = None
+                _block(info, tok)
+
+    def unblock(self, tok: _Token) -> None:
+        tok.extra = None
+        self.store(tok)
+
+    def forget(self, tok: _Token) -> None:
+        del self.every[tok]
+        if self.pos >= 0:
+            _index_remove(self.every_index, _hkey(tok.vals[self.pos]), tok)
+        if tok.extra is None:
+            self.unstore(tok)
+            return
+        info = self.rete._wme_info
+        for wme in tok.extra:
+            record = info.get(wme)
+            if record is not None and record[2]:
+                record[2].pop(tok, None)
+
+
+def _block(record: list, tok: _Token) -> None:
+    blocked = record[2]
+    if blocked is None:
+        record[2] = {tok: None}
+    else:
+        blocked[tok] = None
+
+
+class _NCCNode(_Node):
+    """Conjunctive negation: passes a parent token on while its subnetwork has no result
+    for it.  Results arrive through the partner node at the bottom of the subnetwork."""
+
+    __slots__ = ("partner", "owners")
+
+    def __init__(self, rete: Rete, parent: _Node, key: object) -> None:
+        super().__init__(rete, parent, key)
+        self.partner: _PartnerNode | None = None
+        self.owners: dict[_Token, _Token] = {}  # parent token -> this node's token
+
+    def all_tokens(self) -> list[_Token]:
+        return list(self.owners.values())
+
+    def left_activate(self, t: _Token) -> None:
+        tok = _Token(t, None, t.vals, self)
+        _adopt(t, tok)
+        self.owners[t] = tok
+        results = self.partner.buffer.pop(t, None)  # type: ignore[union-attr]
+        if results:
+            tok.extra = results
+            for result in results:
+                result.extra = tok
+        else:
+            self.store(tok)
+
+    def block(self, owner: _Token, result: _Token) -> None:
+        results = owner.extra
+        if results is None:
+            owner.extra = {result: None}
+            self.unstore(owner)
+            self.rete._delete_children(owner)
+        else:
+            results[result] = None  # type: ignore[index]
+
+    def release(self, owner: _Token, result: _Token) -> None:
+        results = owner.extra
+        del results[result]  # type: ignore[attr-defined]
+        # An owner whose parent is being deleted stays blocked (and unstored) until its turn.
+        if not results and owner.parent.node is not None:  # type: ignore[union-attr]
+            owner.extra = None
+            self.store(owner)
+
+    def forget(self, tok: _Token) -> None:
+        del self.owners[tok.parent]
+        if tok.extra is None:
+            self.unstore(tok)
+            return
+        for result in tok.extra:  # type: ignore[attr-defined]
+            result.extra = None
+
+
+class _PartnerNode(_Node):
+    """Bottom of an NCC subnetwork: each token reaching it is a result for the NCC token
+    ``levels`` levels up."""
+
+    __slots__ = ("ncc", "levels", "buffer")
+
+    def __init__(self, rete: Rete, parent: _Node, ncc: _NCCNode, levels: int) -> None:
+        super().__init__(rete, parent, ("partner", id(ncc)))
+        self.ncc = ncc
+        self.levels = levels
+        self.buffer: dict[_Token, dict[_Token, None]] = {}
+
+    def _owner_key(self, bottom: _Token) -> _Token:
+        t = bottom
+        for _ in range(self.levels):
+            t = t.parent  # type: ignore[assignment]
+        return t
+
+    def left_activate(self, bottom: _Token) -> None:
+        result = _Token(bottom, None, (), self)
+        _adopt(bottom, result)
+        self.tokens[result] = None
+        t = self._owner_key(bottom)
+        owner = self.ncc.owners.get(t)
+        if owner is None:  # the NCC node sees this parent token right after us
+            waiting = self.buffer.get(t)
+            if waiting is None:
+                self.buffer[t] = {result: None}
+            else:
+                waiting[result] = None
+            return
+        result.extra = owner
+        self.ncc.block(owner, result)
+
+    def forget(self, result: _Token) -> None:
+        del self.tokens[result]
+        owner = result.extra
+        if owner is None:
+            waiting = self.buffer.get(self._owner_key(result.parent))  # type: ignore[arg-type]
+            if waiting is not None:
+                waiting.pop(result, None)
+        elif owner.node is not None:  # type: ignore[attr-defined]
+            self.ncc.release(owner, result)  # type: ignore[arg-type]
+
+
+class _ProductionNode(_Node):
+    """Bottom of a production: each token is a Match."""
+
+    __slots__ = ("production", "layout")
+
+    def __init__(self, rete: Rete, parent: _Node, production: Production,
+                 layout: _Layout) -> None:
+        super().__init__(rete, parent, ("production", production.name))
+        self.production = production
+        self.layout = layout
+
+    def left_activate(self, t: _Token) -> None:
+        tok = _Token(t, None, t.vals, self)
+        _adopt(t, tok)
+        match = Match(self.production)
+        match._token = t
+        match._layout = self.layout
+        tok.extra = match
+        self.tokens[tok] = None
+        self.rete._changes.added[match] = None
+
+    def forget(self, tok: _Token) -> None:
+        del self.tokens[tok]
+        self.rete._changes.retract(tok.extra)  # type: ignore[arg-type]
+
+
+class _Layout:
+    """Where a production's WMEs and variables sit in its tokens."""
+
+    __slots__ = ("order", "bindings")
+
+    def __init__(self, order: list[int], bindings: list[tuple[str, int]]) -> None:
+        self.order = order  # order[level] = written index of the element at that level
+        self.bindings = bindings
+
+    def wmes_of(self, tok: _Token) -> tuple[WME | None, ...]:
+        out: list[WME | None] = [None] * len(self.order)
+        for index in reversed(self.order):
+            out[index] = tok.wme
+            tok = tok.parent  # type: ignore[assignment]
+        return tuple(out)
+
+    def bindings_of(self, tok: _Token) -> dict[str, Symbol]:
+        vals = tok.vals
+        return {name: vals[pos] for name, pos in self.bindings}
+
+
+# ----- compiling conditions -------------------------------------------------------------------
+
+
+def _atoms(test: Test) -> list[Test]:
+    """A field test as a flat list of Var / Const / Relational / Disjunction."""
+    if isinstance(test, Conjunction):
+        out: list[Test] = []
+        for inner in test.tests:
+            out.extend(_atoms(inner))
+        return out
+    return [test]
+
+
+def _mentioned(element: ConditionElement) -> set[str]:
+    """Every variable a condition element mentions (equality or relational, nested)."""
+    if isinstance(element, ConjunctiveNegation):
+        return set().union(*(_mentioned(e) for e in element.conditions))
+    names: set[str] = set()
+    for test in _fields(element):
+        names.update(equality_vars(test))
+        names.update(relational_vars(test))
+    return names
+
+
+def _alpha_test(spec: tuple) -> Callable[[WME], bool]:
+    kind = spec[0]
+    if kind == "state":
+        return lambda w: w.id.level is not None
+    if kind == "never":
+        return lambda w: False
+    get = _GET[spec[1]]
+    if kind == "type":
+        cls = {"int": int, "float": float}[spec[2]]
+        return lambda w: get(w).__class__ is cls
+    if kind == "eq":
+        const = spec[2][1]
+        return lambda w: same_symbol(get(w), const)
+    if kind == "rel":
+        relation, const = _RELATIONS[spec[2]], spec[3][1]
+        return lambda w: relation(get(w), const)
+    allowed = frozenset(spec[2])  # disjunction of typed constants
+
+    def in_disjunction(w: WME) -> bool:
+        value = get(w)
+        return (value.__class__.__name__, value) in allowed
+
+    return in_disjunction
+
+
+def _all_of(tests: list[Callable]) -> Callable | None:
+    if not tests:
+        return None
+    if len(tests) == 1:
+        return tests[0]
+    frozen = tuple(tests)
+    if frozen[0].__code__.co_argcount == 1:
+        return lambda w: all(t(w) for t in frozen)
+
+    def every(vals: tuple, w: WME) -> bool:
+        for t in frozen:
+            if not t(vals, w):
+                return False
+        return True
+
+    return every
+
+
+def _beta_test(spec: BetaSpec) -> Callable[[tuple, WME], bool]:
+    (lk, la), op, (rk, ra) = spec
+    rel = same_symbol if op == "=" else _RELATIONS[op]
+    if lk == "w" and rk == "v":
+        get = _GET[la]
+        return lambda vals, w: rel(get(w), vals[ra])
+    if lk == "w":
+        get, get2 = _GET[la], _GET[ra]
+        return lambda vals, w: rel(get(w), get2(w))
+    if rk == "w":
+        get2 = _GET[ra]
+        return lambda vals, w: rel(vals[la], get2(w))
+    return lambda vals, w: rel(vals[la], vals[ra])
+
+
+def _extender(fields: tuple[str, ...]) -> Callable | None:
+    if not fields:
+        return None
+    if len(fields) == 1:
+        get = _GET[fields[0]]
+        return lambda vals, w: vals + (get(w),)
+    getters = tuple(_GET[f] for f in fields)
+    return lambda vals, w: vals + tuple(g(w) for g in getters)
+
+
+class _Plan:
+    """What one condition compiles to at its place in the join order."""
+
+    __slots__ = ("alpha_key", "lookup", "alpha_tests", "index", "beta", "new_fields")
+
+    def __init__(self) -> None:
+        self.alpha_key: tuple = ()
+        self.lookup: tuple = ()
+        self.alpha_tests: list[tuple] = []
+        self.index: tuple[int, str] | None = None
+        self.beta: list[BetaSpec] = []
+        self.new_fields: list[str] = []
+
+
+def _plan_condition(cond: Condition, var_pos: dict[str, int], nvals: int,
+                    deferred: list[tuple[int, str, str]]) -> _Plan:
+    """Compile ``cond`` given the variables bound so far (``var_pos``, updated in place for a
+    positive condition).  Relational tests on variables bound only later are appended to
+    ``deferred`` and placed at the join that binds them."""
+    plan = _Plan()
+    attr_key: object = _ANY
+    value_key: object = _ANY
+    alpha: list[tuple] = []
+    local: dict[str, Ref] = {}  # variables first bound by this condition -> their field
+    field_ref: dict[str, Ref] = {}
+    relational: list[tuple[str, str, str]] = []
+    if cond.goal is not None:
+        alpha.append(("state",))
+    for field, test in zip(_FIELDS, _fields(cond), strict=True):
+        ref: Ref | None = None
+        new_names: list[str] = []
+        for atom in _atoms(test):
+            if isinstance(atom, Var):
+                known = ("v", var_pos[atom.name]) if atom.name in var_pos else local.get(atom.name)
+                if known is None:
+                    new_names.append(atom.name)
+                elif ref is None:
+                    ref = known
+                    if known != ("w", field):
+                        plan.beta.append((("w", field), "=", known))
+                elif known != ref:
+                    plan.beta.append((("w", field), "=", known))
+            elif isinstance(atom, Const):
+                value = atom.value
+                if field == "attr" and attr_key is _ANY:
+                    attr_key = value
+                elif field == "value" and value_key is _ANY:
+                    value_key = value
+                else:
+                    alpha.append(("eq", field, _typed(value)))
+                    continue
+                if value.__class__ in (int, float):
+                    alpha.append(("type", field, value.__class__.__name__))
+            elif isinstance(atom, Disjunction):
+                alpha.append(("disj", field, tuple(sorted({_typed(c.value) for c in atom.values},
+                                                         key=repr))))
+            elif isinstance(atom.operand, Const):
+                if atom.op == "@":
+                    alpha.append(("never",))
+                elif atom.op != "!@":
+                    alpha.append(("rel", field, atom.op, _typed(atom.operand.value)))
+            elif atom.op == "@":
+                alpha.append(("never",))
+            elif atom.op != "!@":
+                relational.append((field, atom.op, atom.operand.name))
+        if new_names:
+            if ref is None:
+                ref = ("w", field)
+                if not cond.negated:
+                    plan.new_fields.append(field)
+            for name in new_names:
+                local[name] = ref
+        if ref is not None:
+            field_ref[field] = ref
+    for field, op, name in relational:
+        if name in var_pos:
+            plan.beta.append((("w", field), op, ("v", var_pos[name])))
+        elif name in local:
+            plan.beta.append((("w", field), op, local[name]))
+        else:  # bound by a later condition: keep this field's value in the token
+            ref = field_ref.get(field)
+            if ref is None:
+                plan.new_fields.append(field)
+                ref = field_ref[field] = ("w", field)
+            lhs = nvals + plan.new_fields.index(ref[1]) if ref[0] == "w" else ref[1]
+            deferred.append((lhs, op, name))  # type: ignore[arg-type]
+    if not cond.negated:
+        for name, ref in local.items():
+            var_pos[name] = ref[1] if ref[0] == "v" else nvals + plan.new_fields.index(ref[1])
+        for item in list(deferred):
+            lhs, op, name = item
+            if name in local and lhs < nvals:
+                plan.beta.append((("v", lhs), op, local[name]))
+                deferred.remove(item)
+    _choose_index(plan)
+    tests = tuple(sorted(set(alpha), key=repr))
+    acc = bool(cond.acceptable)
+    plan.alpha_tests = list(tests)
+    plan.lookup = (attr_key, value_key, acc)
+    plan.alpha_key = (_typed(attr_key) if attr_key is not _ANY else None,
+                      _typed(value_key) if value_key is not _ANY else None, acc, tests)
+    return plan
+
+
+def _choose_index(plan: _Plan) -> None:
+    """Hash the join on one equality test between the WME and an earlier binding."""
+    candidates = [spec for spec in plan.beta
+                  if spec[1] == "=" and spec[0][0] == "w" and spec[2][0] == "v"]
+    if not candidates:
+        return
+    best = min(candidates, key=lambda spec: _INDEX_PREFERENCE[spec[0][1]])  # type: ignore
+    plan.beta.remove(best)
+    plan.index = (best[2][1], best[0][1])  # type: ignore[assignment]
+
+
+def _join_cost(cond: Condition, bound: set[str]) -> int:
+    """Cheapest first: attribute and value fixed (a check), then attribute fixed."""
+
+    def fixed(test: Test) -> bool:
+        atoms = _atoms(test)
+        return any(isinstance(a, (Const, Disjunction)) for a in atoms) or bool(
+            bound.intersection(equality_vars(test)))
+
+    attr, value = fixed(cond.attr_test), fixed(cond.value_test)
+    return 0 if attr and value else 1 if attr else 2
+
+
+def _join_order(elements: tuple[ConditionElement, ...], bound: set[str], scope: set[str],
+                first_fixed: bool) -> list[int]:
+    """Most constrained first, keeping linkage: a positive condition joins on an identifier
+    already bound; negations go in as soon as the variables they share are bound."""
+    bound = set(bound)
+    remaining = list(range(len(elements)))
+    order: list[int] = []
+
+    def place(index: int) -> None:
+        remaining.remove(index)
+        order.append(index)
+        element = elements[index]
+        if isinstance(element, Condition) and not element.negated:
+            for test in _fields(element):
+                bound.update(equality_vars(test))
+
+    if first_fixed and remaining:
+        place(0)
+    while remaining:
+        for index in list(remaining):
+            element = elements[index]
+            if isinstance(element, Condition) and not element.negated:
+                continue
+            if (_mentioned(element) & scope) <= bound:
+                place(index)
+        positives = [i for i in remaining
+                     if isinstance(elements[i], Condition) and not elements[i].negated]
+        if not positives:
+            if remaining:
+                place(remaining[0])
+            continue
+        linked = [i for i in positives if bound.intersection(equality_vars(elements[i].id_test))]
+        pool = linked or [i for i in positives if elements[i].goal is not None] or positives
+        place(min(pool, key=lambda i: (_join_cost(elements[i], bound), i)))
+    return order
+
+
+# ----- the network ----------------------------------------------------------------------------
+
+
+class Rete:
+    """Doorenbos's Rete with hashed alpha and beta memories, negative and NCC nodes and
+    shared prefixes.  Same interface as :class:`BruteForceMatcher`.
+
+    ``check_links=False`` accepts conditions that are not linked to a state (the real kernel
+    only warns about them); they are joined on any bound variable, or as a cross product.
+    """
+
+    def __init__(self, check_links: bool = True) -> None:
+        self.check_links = check_links
+        self._root = _Node(self, None)
+        self._root_token = _Token(None, None, (), self._root)
+        self._root.tokens[self._root_token] = None
+        self._pnodes: dict[str, _ProductionNode] = {}
+        self._amems: dict[tuple, _AlphaMemory] = {}
+        self._alpha_index: dict[tuple, list[_AlphaMemory]] = {}
+        self._alpha_cache: dict[tuple, list[_AlphaMemory]] = {}
+        # per WME: [alpha memories, tokens built on it, negative tokens it blocks]
+        self._wme_info: dict[WME, list] = {}
+        self._changes = _Changes()
+
+    # ----- public interface -----
+
+    def add_production(self, production: Production) -> None:
+        if production.name in self._pnodes:
+            raise SoarSemanticError(production.name, "a production with this name exists",
+                                    production.location)
+        check_production(production, links=self.check_links)
+        conditions = production.conditions
+        scope = _bound_by(conditions)
+        var_pos: dict[str, int] = {}
+        bottom, order = self._build_scope(conditions, self._root, var_pos, 0, scope, True)
+        layout = _Layout(order, sorted((n, p) for n, p in var_pos.items() if n in scope))
+        pnode = _ProductionNode(self, bottom, production, layout)
+        bottom.children.append(pnode)
+        self._pnodes[production.name] = pnode
+        for tok in list(bottom.tokens):
+            pnode.left_activate(tok)
+
+    def excise(self, name: str) -> None:
+        pnode = self._pnodes.pop(name, None)
+        if pnode is None:
+            raise KeyError(f"no production named {name!r}")
+        self._remove_node(pnode)
+
+    def add_wme(self, wme: WME) -> None:
+        if wme in self._wme_info:
+            raise ValueError(f"{wme!r} is already in working memory")
+        amems: list[_AlphaMemory] = []
+        self._wme_info[wme] = [amems, None, None]
+        for amem in self._alpha_candidates(wme):
+            accept = amem.accept
+            if accept is None or accept(wme):
+                amem.add(wme)
+                amems.append(amem)
+                for node in amem.successors:
+                    node.right_activate(wme)
+
+    def remove_wme(self, wme: WME) -> None:
+        info = self._wme_info.pop(wme, None)
+        if info is None:
+            raise ValueError(f"{wme!r} is not in working memory")
+        for amem in info[0]:
+            amem.remove(wme)
+        built = info[1]
+        if built:
+            for tok in built:
+                if tok.node is not None:
+                    tok.parent.children.pop(tok, None)
+                    self._delete_tokens([tok])
+        blocked = info[2]
+        if blocked:
+            for tok in blocked:
+                node = tok.node
+                if node is not None:
+                    blockers = tok.extra
+                    del blockers[wme]
+                    if not blockers:
+                        node.unblock(tok)
+
+    def take_changes(self) -> tuple[list[Match], list[Match]]:
+        return self._changes.take()
+
+    def matches(self, name: str) -> list[Match]:
+        pnode = self._pnodes.get(name)
+        if pnode is None:
+            raise KeyError(f"no production named {name!r}")
+        return [tok.extra for tok in pnode.tokens]  # type: ignore[misc]
+
+    def productions(self) -> list[Production]:
+        return [pnode.production for pnode in self._pnodes.values()]
+
+    # ----- alpha network -----
+
+    def _alpha_candidates(self, wme: WME) -> list[_AlphaMemory]:
+        attr, value, acc = wme.attr, wme.value, wme.acceptable
+        akey = _IDENT if attr.__class__ is Identifier else attr
+        vkey = _IDENT if value.__class__ is Identifier else value
+        key = (akey, vkey, acc)
+        found = self._alpha_cache.get(key)
+        if found is None:
+            found = []
+            index = self._alpha_index
+            for probe in (key, (akey, _ANY, acc), (_ANY, vkey, acc), (_ANY, _ANY, acc)):
+                amems = index.get(probe)
+                if amems:
+                    found.extend(amems)
+            if len(self._alpha_cache) >= _ALPHA_CACHE_LIMIT:
+                self._alpha_cache.clear()
+            self._alpha_cache[key] = found
+        return found
+
+    def _alpha_memory(self, plan: _Plan) -> _AlphaMemory:
+        amem = self._amems.get(plan.alpha_key)
+        if amem is not None:
+            return amem
+        amem = _AlphaMemory(plan.alpha_key, plan.lookup,
+                            _all_of([_alpha_test(spec) for spec in plan.alpha_tests]))
+        self._amems[plan.alpha_key] = amem
+        self._alpha_index.setdefault(plan.lookup, []).append(amem)
+        self._alpha_cache.clear()
+        for wme, info in self._wme_info.items():
+            if self._alpha_accepts(amem, wme):
+                amem.add(wme)
+                info[0].append(amem)
+        return amem
+
+    @staticmethod
+    def _alpha_accepts(amem: _AlphaMemory, wme: WME) -> bool:
+        attr_key, value_key, acc = amem.lookup
+        if wme.acceptable != acc:
+            return False
+        if attr_key is not _ANY and not (wme.attr.__class__ is not Identifier
+                                         and wme.attr == attr_key):
+            return False
+        if value_key is not _ANY and not (wme.value.__class__ is not Identifier
+                                          and wme.value == value_key):
+            return False
+        return amem.accept is None or amem.accept(wme)
+
+    def _drop_alpha_memory(self, amem: _AlphaMemory) -> None:
+        del self._amems[amem.key]
+        siblings = self._alpha_index[amem.lookup]
+        siblings.remove(amem)
+        if not siblings:
+            del self._alpha_index[amem.lookup]
+        self._alpha_cache.clear()
+        for wme in amem.wmes:
+            self._wme_info[wme][0].remove(amem)
+
+    # ----- building -----
+
+    def _build_scope(self, elements: tuple[ConditionElement, ...], parent: _Node,
+                     var_pos: dict[str, int], nvals: int, scope: set[str],
+                     first_fixed: bool) -> tuple[_Node, list[int]]:
+        order = _join_order(elements, set(var_pos), scope, first_fixed)
+        deferred: list[tuple[int, str, str]] = []
+        node = parent
+        for index in order:
+            element = elements[index]
+            if isinstance(element, ConjunctiveNegation):
+                node = self._build_ncc(element, node, dict(var_pos), nvals, scope)
+                continue
+            plan = _plan_condition(element, var_pos, nvals, deferred)
+            amem = self._alpha_memory(plan)
+            check = _all_of([_beta_test(spec) for spec in plan.beta])
+            if element.negated:
+                key = ("neg", id(amem), plan.index, tuple(plan.beta))
+                node = self._child(node, key, lambda p, k, a=amem, pl=plan, c=check:
+                                   _NegativeNode(self, p, k, a, pl.index, c), amem)
+            else:
+                fields = tuple(plan.new_fields)
+                key = ("join", id(amem), plan.index, tuple(plan.beta), fields)
+                node = self._child(node, key, lambda p, k, a=amem, pl=plan, c=check, f=fields:
+                                   _JoinNode(self, p, k, a, pl.index, c, _extender(f)), amem)
+                nvals += len(fields)
+        if deferred:  # unreachable after check_production; kept as a loud guard
+            raise AssertionError(f"relational tests never placed: {deferred}")
+        return node, order
+
+    def _child(self, parent: _Node, key: tuple, make: Callable, amem: _AlphaMemory) -> _Node:
+        node = parent.child_map.get(key)
+        if node is not None:
+            return node
+        node = make(parent, key)
+        parent.children.append(node)
+        parent.child_map[key] = node
+        amem.successors.insert(0, node)  # descendants before ancestors: no duplicate tokens
+        for tok in list(parent.tokens):
+            node.left_activate(tok)
+        return node
+
+    def _build_ncc(self, ncc: ConjunctiveNegation, parent: _Node, var_pos: dict[str, int],
+                   nvals: int, scope: set[str]) -> _Node:
+        inner_scope = scope | _bound_by(ncc.conditions)
+        bottom, _ = self._build_scope(ncc.conditions, parent, var_pos, nvals, inner_scope, False)
+        key = ("ncc", id(bottom))
+        node = parent.child_map.get(key)
+        if node is not None:
+            return node
+        node = _NCCNode(self, parent, key)
+        partner = _PartnerNode(self, bottom, node, len(ncc.conditions))
+        node.partner = partner
+        bottom.children.append(partner)
+        for tok in list(bottom.tokens):
+            partner.left_activate(tok)
+        parent.children.append(node)  # after the subnetwork: it must see a token first
+        parent.child_map[key] = node
+        for tok in list(parent.tokens):
+            node.left_activate(tok)
+        return node
+
+    # ----- removing -----
+
+    def _remove_node(self, node: _Node) -> None:
+        """Remove a childless node, then its ancestors that are left without children."""
+        if node is self._root or node.parent is None or node.children:
+            return
+        parent = node.parent
+        for tok in node.all_tokens():
+            if tok.node is not None:
+                tok.parent.children.pop(tok, None)  # type: ignore[union-attr]
+                self._delete_tokens([tok])
+        parent.children.remove(node)
+        if parent.child_map.get(node.key) is node:
+            del parent.child_map[node.key]
+        node.parent = None  # marks it removed
+        amem = getattr(node, "amem", None)
+        if amem is not None:
+            amem.successors.remove(node)
+            if not amem.successors:
+                self._drop_alpha_memory(amem)
+        if isinstance(node, _NCCNode):
+            self._remove_node(node.partner)  # type: ignore[arg-type]
+        self._remove_node(parent)
+
+    def _delete_children(self, tok: _Token) -> None:
+        children = tok.children
+        if children:
+            tok.children = None
+            self._delete_tokens(list(children))
+
+    def _delete_tokens(self, stack: list[_Token]) -> None:
+        """Delete tokens (already detached from their parents) and all their descendants.
+        A token is marked dead before its descendants are visited, which an NCC owner
+        relies on (see _NCCNode.release)."""
+        info = self._wme_info
+        while stack:
+            tok = stack.pop()
+            node = tok.node
+            if node is None:
+                continue
+            node.forget(tok)
+            tok.node = None
+            wme = tok.wme
+            if wme is not None:
+                record = info.get(wme)
+                if record is not None and record[1]:
+                    record[1].pop(tok, None)
+            children = tok.children
+            if children:
+                tok.children = None
+                stack.extend(children)
+
