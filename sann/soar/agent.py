@@ -33,7 +33,7 @@ from .instantiation import (
     tested_operators,
 )
 from .memory import WME, Identifier, IdentifierFactory, Symbol
-from .preferences import ACCEPTABLE, REJECT, REQUIRE, Preference, Slot, preference_type
+from .preferences import ACCEPTABLE, PROHIBIT, REJECT, REQUIRE, Preference, Slot, preference_type
 from .production import Command, Const, FuncCall, MakeAction, Production, Var
 from .rhs import FUNCTIONS, format_value
 from .trace import print_identifier, trace_preference, trace_wme
@@ -831,15 +831,27 @@ class Agent:
             self._slots.pop(ident, None)
 
     def _diff_slot(self, slot: Slot, adds: list, removes: list[WME]) -> None:
-        _, candidates = dec.run_preference_semantics(slot, None)
-        wanted = {_vkey(v): v for v in candidates}
-        for key, wme in list(slot.wmes.items()):
-            if key not in wanted:
-                del slot.wmes[key]
-                removes.append(wme)
+        """A non-operator slot holds every acceptable value that is not rejected."""
+        prefs = slot.prefs
+        acceptable = prefs.get(ACCEPTABLE)
+        wanted: dict[object, Symbol] = {}
+        if acceptable:
+            for pref in acceptable:
+                value = pref.value
+                key = value if type(value) is not float else (float, value)
+                if key not in wanted:
+                    wanted[key] = value
+            if len(wanted) > 1:  # the kernel's candidate list is built front-first
+                wanted = dict(reversed(wanted.items()))
+            for ptype in (REJECT, PROHIBIT):
+                for pref in prefs.get(ptype, ()):
+                    wanted.pop(_vkey(pref.value), None)
+        wmes = slot.wmes
+        for key in [k for k in wmes if k not in wanted]:
+            removes.append(wmes.pop(key))
         for key, value in wanted.items():
-            if key not in slot.wmes:
-                slot.wmes[key] = None  # type: ignore[assignment]
+            if key not in wmes:
+                wmes[key] = None  # type: ignore[assignment]
                 adds.append((slot, value))
 
     def _update_acceptable_wmes(self, slot: Slot) -> None:
@@ -1062,6 +1074,8 @@ class Agent:
         return impasse == dec.NONE and not candidates
 
     def _remove_current_decision(self, goal: Goal) -> None:
+        if goal.sub is None and goal.selected() is None:
+            return
         if goal.sub is not None:
             self._remove_goal(goal.sub)
         selected = goal.selected()
