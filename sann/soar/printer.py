@@ -202,8 +202,6 @@ def format_production(production: Production) -> str:
 
 
 def _format_argument(arg: str) -> str:
-    if arg.startswith("{") and arg.endswith("}"):
-        return arg
     if arg and re.fullmatch(r'[^\s;{}"#]+', arg):
         return arg
     return '"' + arg.replace("\\", "\\\\").replace('"', '\\"') + '"'

@@ -249,7 +249,8 @@ class _ToDataclasses(Transformer):
         raise self._syntax_error(f"'{name}' is refused: {_REFUSAL}", name.line, name.column)
 
     def braced(self, items: list) -> str:
-        return self.text[items[0].start_pos : items[-1].end_pos]
+        """A {braced} argument is its text between the braces, verbatim (as in Soar's CLI)."""
+        return self.text[items[0].end_pos : items[-1].start_pos]
 
     # -- constants and tests
 
@@ -814,6 +815,8 @@ def parse_partial(
     withholds that production.)
     """
     parser, transformer = _parser()
+    if text.startswith("\ufeff"):  # a byte-order mark: white space, so columns stay right
+        text = " " + text[1:]
     with _LOCK:
         transformer.reset(text, file, functions)
         try:

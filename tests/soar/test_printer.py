@@ -123,8 +123,8 @@ def test_commands() -> None:
     assert format_command(Command("watch", ("1",))) == "watch 1"
     assert format_command(Command("source", ("my rules.soar",))) == 'source "my rules.soar"'
     assert format_command(Command("echo", ('say "x"', ""))) == r'echo "say \"x\"" ""'
-    assert format_command(Command("gp", ("{x [a b]}",))) == "gp {x [a b]}"
-    for command in parse('source "my rules.soar"; echo "say \\"x\\""; gp {x [a b]}'):
+    assert format_command(Command("gp", ("x [a b]",))) == 'gp "x [a b]"'
+    for command in parse('source "my rules.soar"; echo "say \\"x\\"" {a;b}; gp {x [a b]}'):
         assert parse(format_command(command)) == [command]
 
 

@@ -387,7 +387,7 @@ def test_commands_comments_and_separators() -> None:
         "indifferent-selection --epsilon-greedy\n"
         "multi-attributes ontop 3\n"
         "learn --off\n"
-        "gp {x [a b]}\n"
+        "gp {x [a {b}]}\n"
     )
     items = parse(text, "agent.soar")
     commands = [(i.name, i.args) for i in items if isinstance(i, Command)]
@@ -399,7 +399,7 @@ def test_commands_comments_and_separators() -> None:
         ("indifferent-selection", ("--epsilon-greedy",)),
         ("multi-attributes", ("ontop", "3")),
         ("learn", ("--off",)),
-        ("gp", ("{x [a b]}",)),
+        ("gp", ("x [a {b}]",)),
     ]
     assert [type(i).__name__ for i in items].index("Production") == 4
     assert items[4].conditions[0].value_test == Const("#not a comment")
@@ -410,6 +410,12 @@ def test_productions_separated_by_semicolons_and_empty_input() -> None:
     items = parse("sp {p (state <s> ^a b) --> }; sp {q (state <s> ^a b) --> }")
     assert [p.name for p in items] == ["p", "q"]
     assert parse("") == [] and parse("\n# only a comment\n;\n") == []
+
+
+def test_byte_order_mark_and_windows_line_ends() -> None:
+    items = parse("\ufeffwatch 1\r\nsp {p\r\n (state <s> ^a b)\r\n-->\r\n}\r\n")
+    assert items[0] == Command("watch", ("1",)) and items[1].name == "p"
+    assert items[1].location.line == 2
 
 
 def test_parse_file_names_the_file(tmp_path: Path) -> None:
