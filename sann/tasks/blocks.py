@@ -44,8 +44,11 @@ features are, like the paper's, a lossy description, and the labels are not.
 
 from __future__ import annotations
 
+import json
 import math
-from dataclasses import dataclass, field
+import os
+import time
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -530,3 +533,221 @@ def observe_scene(scene: Scene, rng: np.random.Generator | int | None,
     params = params or BlockWorldParams()
     obs = observe(scene, rng, params)
     return ObservedScene(scene, features(scene, obs, params), graspable(scene, params))
+
+
+# --------------------------------------------------------------------------- datasets
+
+DATASET_VERSION = "blocks-dataset-1"  # bump when generation, features or labels change
+KINDS = ("D1", "D2")
+_SPLITS = ("train", "test")
+
+
+@dataclass
+class BlockDataset:
+    """D1 or D2 of one mode, split into train and test (scenes never straddle the split).
+
+    D1 (one sample per block): ``X`` = the 13 Table-1 features + the image id (14 columns).
+    D2 (one sample per scene): ``X`` = 26 x 13 features, one row of 13 per block id (A first;
+    zeros for blocks not in the scene), flattened, + the designated target's id (339 columns).
+    ``logical``: the fusion column (eq. 2 over the plans of the sample's target); ``y``: 1 if
+    the target is graspable now (true geometry), else 0. ``image``: the scene index of each
+    sample (train scenes 0..S-1, test scenes numbered on from S). ``plans``: the sequences of
+    the sample's target, as text ``"x:3:DCA y:2:DA"`` (pair:T_o:order). :meth:`scene`
+    regenerates any scene of the dataset, e.g. for drawing.
+    """
+
+    kind: str
+    mode: str
+    X_train: np.ndarray
+    logical_train: np.ndarray
+    y_train: np.ndarray
+    X_test: np.ndarray
+    logical_test: np.ndarray
+    y_test: np.ndarray
+    image_train: np.ndarray
+    image_test: np.ndarray
+    plans_train: np.ndarray
+    plans_test: np.ndarray
+    feature_names: list[str]
+    meta: dict
+
+    def scene(self, image: int) -> Scene:
+        """The scene of ``image`` (a value of ``image_train``/``image_test``)."""
+        n_train_scenes = int(self.meta["train_scenes"])
+        split, index = ("train", image) if image < n_train_scenes else (
+            "test", image - n_train_scenes)
+        params = BlockWorldParams(**self.meta["params"])
+        return _dataset_scene(self.kind, self.mode, split, index, int(self.meta["seed"]),
+                              params, None)[0]
+
+    @property
+    def test_scenes(self) -> list[Scene]:
+        """Every test scene, in image order."""
+        return [self.scene(int(i)) for i in np.unique(self.image_test)]
+
+
+def feature_names_for(kind: str) -> list[str]:
+    """Column names of ``X`` for D1 or D2."""
+    if kind == "D1":
+        return [*FEATURE_NAMES, "Image"]
+    return [f"{name}.{f}" for name in NAMES for f in FEATURE_NAMES] + ["TargetId"]
+
+
+def _scene_rng(kind: str, mode: str, split: str, index: int, seed: int) -> np.random.Generator:
+    return np.random.default_rng(
+        [seed, KINDS.index(kind), MODES.index(mode), _SPLITS.index(split), index])
+
+
+def _dataset_scene(kind: str, mode: str, split: str, index: int, seed: int,
+                   params: BlockWorldParams, max_blocks: int | None
+                   ) -> tuple[Scene, np.random.Generator]:
+    """Scene ``index`` of a split: its block count, layout and noise all come from one rng."""
+    rng = _scene_rng(kind, mode, split, index, seed)
+    n = int(rng.integers(params.min_blocks, params.max_blocks + 1))
+    if max_blocks is not None:
+        n = min(n, max_blocks)
+    return generate_scene(mode, n, rng, params), rng
+
+
+def _choose_target(labels: np.ndarray, rng: np.random.Generator) -> int:
+    """D2 target slot: with probability 1/2 a graspable block, else a blocked one (when the
+    scene has one of that kind), so that D2 labels are balanced where the scene allows."""
+    want = rng.random() < 0.5
+    pool = np.flatnonzero(labels == want)
+    if len(pool) == 0:
+        pool = np.arange(len(labels))
+    return int(rng.choice(pool))
+
+
+def _plan_text(seqs: list) -> str:
+    return " ".join(f"{s.pair}:{s.t_o}:{s.order}" for s in seqs)
+
+
+def _build_split(kind: str, mode: str, split: str, n_samples: int, first_image: int,
+                 seed: int, params: BlockWorldParams, planner, bar) -> tuple[dict, int]:
+    from sann.fusion import logical_item
+
+    X, L, Y, IMG, PLANS = [], [], [], [], []
+    count = index = 0
+    while count < n_samples:
+        cap = n_samples - count if kind == "D1" else None
+        scene, rng = _dataset_scene(kind, mode, split, index, seed, params, cap)
+        obs = observe_scene(scene, rng, params)
+        image = first_image + index
+        if kind == "D1":
+            plans = planner.plan(obs.features)
+            rows = np.column_stack([obs.features, np.full(scene.n, image)])
+            slots = range(scene.n)
+        else:
+            slot = _choose_target(obs.labels, rng)
+            plans = planner.plan(obs.features, [int(scene.ids[slot])])
+            padded = np.zeros((MAX_BLOCKS, len(FEATURE_NAMES)))
+            padded[scene.ids - 1] = obs.features
+            rows = np.append(padded.ravel(), scene.ids[slot])[None, :]
+            slots = [slot]
+        for r, slot in zip(rows, slots, strict=True):
+            seqs = plans[int(scene.ids[slot])]
+            X.append(r)
+            L.append(logical_item(s.t_o for s in seqs))
+            Y.append(int(obs.labels[slot]))
+            IMG.append(image)
+            PLANS.append(_plan_text(seqs))
+        count += len(slots)
+        index += 1
+        if bar is not None:
+            bar.update(len(slots))
+    arrays = {
+        f"X_{split}": np.asarray(X, dtype=np.float32),
+        f"logical_{split}": np.asarray(L, dtype=np.float32),
+        f"y_{split}": np.asarray(Y, dtype=np.int64),
+        f"image_{split}": np.asarray(IMG, dtype=np.int64),
+        f"plans_{split}": np.asarray(PLANS, dtype=str),
+    }
+    return arrays, index
+
+
+def _check_count(value: object, name: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value <= 0:
+        raise ValueError(f"{name} must be a positive integer, got {value!r}")
+    return int(value)
+
+
+def make_dataset(
+    kind: str,
+    mode: str,
+    n_train: int = 10_000,
+    n_test: int = 2_000,
+    seed: int = 0,
+    params: BlockWorldParams | None = None,
+    engine: str = "sann",
+    rules: str | os.PathLike[str] | None = None,
+    progress: bool = False,
+    cap: int | None = None,
+    horizon: int | None = None,
+    use_cache: bool = True,
+) -> BlockDataset:
+    """Build (or load from the cache) dataset ``kind`` (D1/D2) of ``mode`` (C1/C2/C3).
+
+    Every scene is planned by ``rules`` in ``engine``; the fusion column is eq. 2 over the
+    target's sequences. The cache key covers every argument except ``engine``, ``progress``
+    and ``use_cache`` (the engines give identical plans: tests/tasks/test_planning.py checks
+    it), plus the rule file's sha256 and ``DATASET_VERSION``.
+    """
+    from sann import cache
+    from sann.tasks.planning import DEFAULT_CAP, DEFAULT_HORIZON, DEFAULT_RULES, PlannerConfig
+
+    if kind not in KINDS:
+        raise ValueError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}")
+    mode = check_mode(mode)
+    n_train, n_test = _check_count(n_train, "n_train"), _check_count(n_test, "n_test")
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ValueError(f"seed must be an integer >= 0, got {seed!r}")
+    params = params or BlockWorldParams()
+    if not isinstance(params, BlockWorldParams):
+        raise ValueError(f"params must be a BlockWorldParams, got {type(params).__name__}")
+    config = PlannerConfig(engine=engine, rules=rules or DEFAULT_RULES,
+                           cap=DEFAULT_CAP if cap is None else cap,
+                           horizon=DEFAULT_HORIZON if horizon is None else horizon)
+    rules_sha = cache.file_sha256(config.rules)
+    description = {
+        "kind": kind, "mode": mode, "n_train": n_train, "n_test": n_test, "seed": int(seed),
+        "params": asdict(params), "rules_sha256": rules_sha, "cap": config.cap,
+        "horizon": config.horizon, "version": DATASET_VERSION,
+    }
+
+    def build() -> dict[str, np.ndarray]:
+        return _build_arrays(kind, mode, n_train, n_test, int(seed), params, config, progress)
+
+    t0 = time.perf_counter()
+    arrays, hit = cache.get_or_build(f"blocks-{kind}-{mode}", description, build,
+                                     use_cache=use_cache)
+    meta = {**description, **json.loads(str(arrays.pop("meta")))}
+    meta.update(cache_hit=hit, seconds=time.perf_counter() - t0, engine_used=(
+        meta["engine"] if hit else engine))
+    return BlockDataset(kind=kind, mode=mode, feature_names=feature_names_for(kind), meta=meta,
+                        **arrays)
+
+
+def _build_arrays(kind: str, mode: str, n_train: int, n_test: int, seed: int,
+                  params: BlockWorldParams, config, progress: bool) -> dict[str, np.ndarray]:
+    from sann.tasks.planning import Planner
+
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=n_train + n_test, desc=f"{kind}-{mode}", unit="sample")
+    t0 = time.perf_counter()
+    try:
+        with Planner(config) as planner:
+            train, n_scenes = _build_split(kind, mode, "train", n_train, 0, seed, params,
+                                           planner, bar)
+            test, n_test_scenes = _build_split(kind, mode, "test", n_test, n_scenes, seed,
+                                               params, planner, bar)
+    finally:
+        if bar is not None:
+            bar.close()
+    meta = {"train_scenes": n_scenes, "test_scenes": n_test_scenes, "engine": config.engine,
+            "build_seconds": time.perf_counter() - t0, "train_samples": n_train,
+            "test_samples": n_test}
+    return {**train, **test, "meta": np.array(json.dumps(meta))}

@@ -1,0 +1,120 @@
+"""An atomic, keyed on-disk cache of NumPy arrays (datasets of the block and cup tasks).
+
+Key: a SHA-256 over a JSON description of everything that determines the data (parameters,
+the sha256 of the rule file that planned it, a code version string), so a change to any of
+them misses the cache instead of serving stale data.
+
+Atomicity: an entry is written to a temporary file in the cache directory, flushed and
+fsync'ed, then ``os.replace``d onto its final name, which is atomic on POSIX. A crash leaves at
+most a ``*.tmp`` file, which is never read (and is swept by later writes once it is old). An
+entry that fails to load (truncated, corrupt, wrong format) counts as a miss and is rebuilt.
+Every entry carries its own key, checked on load.
+
+Directory: ``$SANN_CACHE`` if set, else ``.sann-cache/`` at the repository root.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import os
+import tempfile
+import time
+import zipfile
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+_REPO_ROOT = Path(__file__).resolve().parents[1]
+_STALE_TMP_SECONDS = 3600.0
+_KEY_FIELD = "__cache_key__"
+
+
+def cache_dir() -> Path:
+    """The cache directory (created on demand)."""
+    env = os.environ.get("SANN_CACHE")
+    return Path(env) if env else _REPO_ROOT / ".sann-cache"
+
+
+def file_sha256(path: str | os.PathLike[str]) -> str:
+    """Hex SHA-256 of a file's bytes (e.g. the rule file a dataset was planned with)."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def make_key(description: dict) -> str:
+    """A stable hex key for a JSON-serialisable description (sorted keys)."""
+    text = json.dumps(description, sort_keys=True, separators=(",", ":"), default=str)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def entry_path(name: str, key: str, directory: Path | None = None) -> Path:
+    """Where the entry ``name``/``key`` lives: ``<dir>/<name>-<key[:20]>.npz``."""
+    if not name or any(c in name for c in "/\\\0"):
+        raise ValueError(f"cache entry name must be a plain file name part, got {name!r}")
+    return (directory or cache_dir()) / f"{name}-{key[:20]}.npz"
+
+
+def load(name: str, key: str, directory: Path | None = None) -> dict[str, np.ndarray] | None:
+    """The cached arrays, or None on a miss (absent, unreadable, or written for another key)."""
+    path = entry_path(name, key, directory)
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            arrays = {k: data[k] for k in data.files}
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError):
+        return None
+    stored = arrays.pop(_KEY_FIELD, None)
+    if stored is None or str(stored) != key:
+        return None
+    return arrays
+
+
+def save(name: str, key: str, arrays: dict[str, np.ndarray],
+         directory: Path | None = None) -> Path:
+    """Write the entry atomically (temporary file + fsync + os.replace); returns its path."""
+    if _KEY_FIELD in arrays:
+        raise ValueError(f"{_KEY_FIELD} is reserved")
+    path = entry_path(name, key, directory)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    _sweep_stale_tmp(path.parent)
+    buf = io.BytesIO()
+    np.savez(buf, **arrays, **{_KEY_FIELD: np.array(key)})
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(buf.getvalue())
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def get_or_build(name: str, description: dict,
+                 build: Callable[[], dict[str, np.ndarray]],
+                 directory: Path | None = None, use_cache: bool = True
+                 ) -> tuple[dict[str, np.ndarray], bool]:
+    """Load the entry for ``description`` or build and store it. Returns (arrays, was_hit)."""
+    key = make_key(description)
+    if use_cache:
+        hit = load(name, key, directory)
+        if hit is not None:
+            return hit, True
+    arrays = build()
+    if use_cache:
+        save(name, key, arrays, directory)
+    return arrays, False
+
+
+def _sweep_stale_tmp(directory: Path) -> None:
+    """Remove temporary files left by interrupted writes more than an hour ago."""
+    now = time.time()
+    for tmp in directory.glob(".*.tmp"):
+        try:
+            if now - tmp.stat().st_mtime > _STALE_TMP_SECONDS:
+                tmp.unlink()
+        except OSError:
+            pass
