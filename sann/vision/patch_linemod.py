@@ -20,7 +20,6 @@ from typing import Literal
 
 import numpy as np
 from sklearn.cluster import KMeans
-from sklearn.manifold import TSNE
 
 __all__ = [
     "Clustering",
@@ -56,6 +55,62 @@ def _feature_descriptor(features: np.ndarray) -> np.ndarray:
     return np.hstack([xy, scale * np.cos(angle)[:, None], scale * np.sin(angle)[:, None]])
 
 
+def _row_affinities(d2: np.ndarray, perplexity: float) -> np.ndarray:
+    """Conditional Gaussian affinities with each row's bandwidth set to the perplexity."""
+    n = len(d2)
+    beta, lo, hi = np.ones(n), np.zeros(n), np.full(n, np.inf)
+    target = np.log(perplexity)
+    off = ~np.eye(n, dtype=bool)
+    # Distances relative to each row's nearest neighbour: the same affinities, no underflow.
+    d = d2 - np.min(np.where(off, d2, np.inf), axis=1, keepdims=True)
+    d[~off] = 0.0
+    for _ in range(60):
+        p = np.exp(-d * beta[:, None]) * off
+        sp = p.sum(axis=1)
+        entropy = np.log(sp) + beta * (d * p).sum(axis=1) / sp
+        wide = entropy > target  # too flat: narrow the kernel
+        lo = np.where(wide, beta, lo)
+        hi = np.where(wide, hi, beta)
+        beta = np.where(np.isinf(hi), beta * 2.0, 0.5 * (lo + hi))
+    return p / sp[:, None]
+
+
+def tsne_small(data: np.ndarray, perplexity: float, n_iter: int = 500) -> np.ndarray:
+    """Exact 2-D t-SNE (van der Maaten & Hinton 2008) for the few dozen features of a template.
+
+    scikit-learn's TSNE takes about half a second per call whatever the size, which over a
+    thousand templates would make training take many minutes; for 63 points the exact
+    gradient is a 63 x 63 array operation, so this version takes milliseconds. It follows the
+    reference optimiser: early exaggeration 12 for 250 iterations, momentum 0.5 then 0.8,
+    adaptive gains, and a PCA initialisation, which also makes it deterministic.
+    """
+    x = np.asarray(data, dtype=np.float64)
+    n = len(x)
+    x = x - x.mean(axis=0)
+    d2 = np.sum((x[:, None] - x[None]) ** 2, axis=-1)
+    d2 /= max(float(np.median(d2)), 1e-12)
+    p = _row_affinities(d2, perplexity)
+    p = np.maximum((p + p.T) / (2.0 * n), 1e-12)
+    _, _, vt = np.linalg.svd(x, full_matrices=False)
+    y = x @ vt[:2].T
+    y *= 1e-4 / max(float(np.std(y[:, 0])), 1e-12)
+    lr = max(n / 12.0 / 4.0, 50.0)
+    velocity, gains = np.zeros_like(y), np.ones_like(y)
+    for it in range(n_iter):
+        exaggeration, momentum = (12.0, 0.5) if it < 250 else (1.0, 0.8)
+        sq = np.sum(y**2, axis=1)
+        num = 1.0 / (1.0 + np.maximum(sq[:, None] + sq[None] - 2.0 * y @ y.T, 0.0))
+        np.fill_diagonal(num, 0.0)
+        q = np.maximum(num / num.sum(), 1e-12)
+        w = (exaggeration * p - q) * num
+        grad = 4.0 * (w.sum(axis=1)[:, None] * y - w @ y)
+        same = np.sign(grad) == np.sign(velocity)
+        gains = np.maximum(np.where(same, gains * 0.8, gains + 0.2), 0.01)
+        velocity = momentum * velocity - lr * gains * grad
+        y = y + velocity
+    return y
+
+
 def cluster_features(
     features: np.ndarray, n_patches: int, method: Clustering = "kmeans", seed: int = 0
 ) -> np.ndarray:
@@ -77,9 +132,7 @@ def cluster_features(
         data = features[:, :2].astype(np.float64)
     elif method == "tsne+kmeans":
         perplexity = float(min(30.0, max(2.0, (n - 1) / 3.0)))
-        data = TSNE(
-            n_components=2, perplexity=perplexity, init="pca", random_state=seed, max_iter=500
-        ).fit_transform(_feature_descriptor(features))
+        data = tsne_small(_feature_descriptor(features), perplexity)
     else:
         raise ValueError(f"unknown clustering {method!r}; use 'kmeans' or 'tsne+kmeans'")
     raw = KMeans(n_clusters=n_patches, n_init=4, random_state=seed).fit_predict(data)

@@ -13,7 +13,8 @@ from sann.vision.detect import (
     detect_cups,
     pose_array,
 )
-from sann.vision.evaluate import evaluate_frame, match_detections, summarize, visible_fractions
+from sann.vision.evaluate import evaluate_frame, match_detections, summarize
+from sann.vision.labels import visible_fractions
 from sann.vision.linemod import TemplateParams, get_templates
 from sann.vision.piles import make_pile
 from sann.vision.render import render, render_cup
@@ -73,7 +74,7 @@ def test_the_clearly_visible_cups_of_a_small_pile_are_found(templates):
     for seed in (0, 2, 3):
         pile = make_pile(4, seed)
         res = render(pile, cam)
-        visible = visible_fractions(res.instance, pile.poses, cam) >= 0.9
+        visible = visible_fractions(pile, cam, res) >= 0.9
         true = cam.world_to_camera @ pile.poses
         found = detect_cups(res.rgb, res.depth_mm, K_PRIMESENSE, CONFIG, templates)
         scores.append(evaluate_frame(found, true, visible))

@@ -147,3 +147,20 @@ def test_acceptance_rule(n_active_color, n_active_depth, n_patches, score, kept)
     color = (np.arange(n_patches) < n_active_color)[None]
     depth = (np.arange(n_patches) < n_active_depth)[None]
     assert accept_candidate(color, depth, np.array([score]), PatchRule()).tolist() == [kept]
+
+
+def test_small_tsne_preserves_neighbourhoods_and_groups():
+    from sklearn.manifold import trustworthiness
+
+    from sann.vision.patch_linemod import tsne_small
+
+    rng = np.random.default_rng(1)
+    centres = np.array([[0, 0, 0, 0], [10, 0, 0, 0], [0, 10, 0, 0], [5, 5, 8, 0]])
+    x = np.vstack([c + rng.normal(size=(16, 4)) for c in centres])
+    y = tsne_small(x, 15.0)
+    assert y.shape == (64, 2) and np.all(np.isfinite(y))
+    assert trustworthiness(x, y, n_neighbors=5) > 0.95
+    assert np.array_equal(y, tsne_small(x, 15.0))
+    labels = cluster_features(_blobs(), 3, "tsne+kmeans")
+    for g in range(3):
+        assert len(set(labels[20 * g: 20 * (g + 1)].tolist())) == 1
