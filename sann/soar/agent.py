@@ -317,6 +317,8 @@ class Agent:
         self._changed_context: list[Slot] = []
         self._new_justifications: list[Instantiation] = []
         self._refs: dict[Identifier, int] = {}
+        self._in_wm_phase = False
+        self._dead_ids: list[Identifier] = []
         self._sources: weakref.WeakKeyDictionary[WME, Instantiation] = weakref.WeakKeyDictionary()
         self._unlinked: list[Identifier] = []
         self._dependents: dict[WME, list[Instantiation]] = {}
@@ -548,38 +550,46 @@ class Agent:
         return chosen, firing
 
     def _elaboration_cycle(self, goal: Goal | None, firing: str) -> None:
-        if self.trace_level >= 2:
-            if goal is None:
+        """One elaboration cycle, as the kernel's "new waterfall" preference phase: the
+        pending assertions of the firing type fire level by level from the active goal down
+        (each level's preferences asserted before the next level fires), then the active
+        goal's retractions and those of removed goals, then the working-memory phase."""
+        if self.trace_level >= 2 and goal is not None and self._phase == "apply":
+            self._emit(f"\t--- Firing Productions ({firing}) For State At Depth {goal.level} ---\n")
+        if goal is None:
+            if self.trace_level >= 3:
                 self._emit("\n--- Inner Elaboration Phase, active level 0 goal # ---\n")
-            else:
-                if self._phase == "apply":
-                    self._emit(
-                        f"\t--- Firing Productions ({firing}) For State At Depth {goal.level} ---\n"
-                    )
+        level_goal = goal
+        while level_goal is not None:
+            if self.trace_level >= 3:
                 self._emit(
-                    f"\n--- Inner Elaboration Phase, active level {goal.level} goal {goal.id} ---\n"
+                    f"\n--- Inner Elaboration Phase, active level {level_goal.level}"
+                    f" goal {level_goal.id} ---\n"
                 )
-        fired: list[Instantiation] = []
+            self._fire_level(level_goal, firing)
+            level_goal = level_goal.sub
         retractions, self._nil_retractions = self._nil_retractions, []
         if goal is not None:
-            queue = goal.pending_i if firing == "IE" else goal.pending_o
-            if queue:
-                matches = list(queue.items())
-                queue.clear()
-                for match, info in reversed(matches):
-                    self._pending_goal.pop(match, None)
-                    inst = self._fire(match, info, goal)
-                    if inst is not None:
-                        fired.append(inst)
-            retractions.extend(goal.retractions)
+            retractions = goal.retractions + retractions
             goal.retractions = []
         for inst in retractions:
             self._retract(inst)
-        self._assert_preferences(fired)
         if self.trace_level >= 2 and goal is not None and self._phase == "apply":
             self._emit(f"\t--- Change Working Memory ({firing}) ---\n")
         self._working_memory_phase()
         self._collect_changes()
+
+    def _fire_level(self, goal: Goal, firing: str) -> None:
+        queue = goal.pending_i if firing == "IE" else goal.pending_o
+        if not queue:
+            return
+        matches = list(queue.items())
+        queue.clear()
+        fired: list[Instantiation] = []
+        for match, info in reversed(matches):
+            self._pending_goal.pop(match, None)
+            fired.append(self._fire(match, info, goal))
+        self._assert_preferences(fired)
 
     def _decision_phase(self) -> None:
         if self.trace_level >= 2:
@@ -786,6 +796,17 @@ class Agent:
 
     def _working_memory_phase(self) -> None:
         """Turn changed slots into WME changes, in the kernel's timetag order."""
+        if self._in_wm_phase:
+            return
+        self._in_wm_phase = True
+        try:
+            self._working_memory_changes()
+        finally:
+            self._in_wm_phase = False
+        while self._dead_ids:
+            self._slots.pop(self._dead_ids.pop(), None)
+
+    def _working_memory_changes(self) -> None:
         while self._changed or self._changed_context:
             changed, self._changed = self._changed, []
             adds: list[tuple[Slot, Symbol]] = []
@@ -793,6 +814,8 @@ class Agent:
             for slot in reversed(changed):
                 slot.changed = False
                 self._diff_slot(slot, adds, removes)
+            if self._gds_index and self._gds_violations(removes):
+                adds = [(slot, value) for slot, value in adds if self._still_wanted(slot, value)]
             for slot, value in adds:
                 wme = slot.wmes[_vkey(value)] = self._add_wme(slot.id, slot.attr, value)
                 if self._level_of(slot.id) > 1:
@@ -809,6 +832,35 @@ class Agent:
                 self._collect_garbage(slot)
             for slot in context:
                 self._collect_garbage(slot)
+
+    def _gds_violations(self, removes: list[WME]) -> bool:
+        """Remove the substates whose goal dependency set holds a WME about to go, before
+        any WME is added (the kernel does it while deciding the slot)."""
+        removed = False
+        for wme in removes:
+            goals = self._gds_index.pop(wme, None)
+            for goal in goals or ():
+                if goal.alive:
+                    if self.trace_level >= 2:
+                        self._emit(
+                            f"\nRemoving state {goal.id} because element in GDS changed."
+                            f" WME: {trace_wme(wme)}"
+                        )
+                    self._remove_goal(goal)
+                    removed = True
+        return removed
+
+    def _still_wanted(self, slot: Slot, value: Symbol) -> bool:
+        key = _vkey(value)
+        prefs = slot.prefs
+        if not any(_vkey(p.value) == key for p in prefs.get(ACCEPTABLE, ())):
+            slot.wmes.pop(key, None)
+            return False
+        for ptype in (REJECT, PROHIBIT):
+            if any(_vkey(p.value) == key for p in prefs.get(ptype, ())):
+                slot.wmes.pop(key, None)
+                return False
+        return True
 
     def _collect_unlinked(self) -> None:
         """Soar 9.6 garbage-collects identifiers no WME links to any more: their input
@@ -1040,8 +1092,9 @@ class Agent:
         if goal.superstate is not None and goal.superstate.sub is goal:
             goal.superstate.sub = None
         del self._goals[goal.id]
-        self._working_memory_phase()
-        self._slots.pop(goal.id, None)
+        self._dead_ids.append(goal.id)
+        if not self._in_wm_phase:
+            self._working_memory_phase()
 
     def _consistent_through(self, limit: Goal | None) -> bool:
         """Check decisions from the top down to ``limit`` (the bottom if None); remove the
