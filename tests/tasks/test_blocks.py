@@ -195,3 +195,91 @@ def test_features_noise_is_small_and_seeded() -> None:
     assert np.array_equal(o1.features[:, 7:], features(scene)[:, 7:])  # relations survive
     exact = observe_scene(scene, 1, BlockWorldParams(sensor_noise=0.0))
     assert np.array_equal(exact.features, features(scene))
+
+
+# --------------------------------------------------------------- datasets
+
+
+@pytest.fixture()
+def tmp_cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("SANN_CACHE", str(tmp_path))
+    return tmp_path
+
+
+def test_d1_dataset(tmp_cache) -> None:
+    from sann.fusion import logical_item
+    from sann.tasks.blocks import make_dataset
+
+    d = make_dataset("D1", "C3", n_train=120, n_test=40, seed=1)
+    assert d.X_train.shape == (120, 14) and d.X_test.shape == (40, 14)
+    assert d.X_train.dtype == np.float32 and d.y_train.dtype == np.int64
+    assert d.logical_train.dtype == np.float32 and d.logical_test.shape == (40,)
+    assert d.feature_names == [*FEATURE_NAMES, "Image"]
+    assert np.array_equal(d.X_train[:, 13], d.image_train)
+    assert set(d.image_train) .isdisjoint(set(d.image_test))  # scenes do not straddle
+    assert 0 < d.y_train.mean() < 1
+    # the fusion column is eq. 2 over the recorded plans
+    for text, value in zip(d.plans_test, d.logical_test, strict=True):
+        t_o = [int(p.split(":")[1]) for p in text.split()]
+        assert value == pytest.approx(logical_item(t_o))
+    # a regenerated test scene is the one the samples came from
+    image = int(d.image_test[0])
+    scene = d.scene(image)
+    rows = d.X_test[d.image_test == image]
+    assert sorted(rows[:, 6].astype(int).tolist()) == scene.ids.tolist()
+    assert np.array_equal(graspable(scene)[np.searchsorted(scene.ids, rows[:, 6].astype(int))],
+                          d.y_test[d.image_test == image].astype(bool))
+    assert d.meta["rules_sha256"] and d.meta["train_samples"] == 120
+    assert not d.meta["cache_hit"]
+
+
+def test_d2_dataset(tmp_cache) -> None:
+    from sann.tasks.blocks import make_dataset
+
+    d = make_dataset("D2", "C2", n_train=60, n_test=20, seed=2)
+    assert d.X_train.shape == (60, 26 * 13 + 1) and len(d.feature_names) == 339
+    assert d.meta["train_scenes"] == 60
+    # balanced by construction where scenes allow (C2 always has a graspable top)
+    assert 0.25 < d.y_train.mean() < 0.75
+    x = d.X_test[0]
+    target = int(x[-1])
+    rows = x[:-1].reshape(26, 13)
+    present = rows[:, 6] > 0
+    assert (rows[present, 6] == np.flatnonzero(present) + 1).all()  # row k is block id k+1
+    assert not rows[~present].any()  # padding is zeros
+    assert present[target - 1]
+
+
+def test_dataset_determinism_and_cache(tmp_cache) -> None:
+    from sann.tasks.blocks import make_dataset
+
+    a = make_dataset("D1", "C1", n_train=50, n_test=20, seed=7)
+    b = make_dataset("D1", "C1", n_train=50, n_test=20, seed=7)
+    c = make_dataset("D1", "C1", n_train=50, n_test=20, seed=7, use_cache=False)
+    assert b.meta["cache_hit"] and not c.meta["cache_hit"]
+    for name in ("X_train", "logical_train", "y_train", "X_test", "logical_test", "y_test"):
+        assert np.array_equal(getattr(a, name), getattr(b, name))
+        assert np.array_equal(getattr(a, name), getattr(c, name))
+    assert a.plans_test.tolist() == c.plans_test.tolist()
+    other = make_dataset("D1", "C1", n_train=50, n_test=20, seed=8)
+    assert not np.array_equal(a.X_train, other.X_train)
+
+
+def test_dataset_bad_parameters(tmp_cache) -> None:
+    from sann.tasks.blocks import make_dataset
+
+    with pytest.raises(ValueError, match="C1, C2, C3"):
+        make_dataset("D1", "C4")
+    with pytest.raises(ValueError, match="kind"):
+        make_dataset("D3", "C1")
+    with pytest.raises(ValueError, match="n_train"):
+        make_dataset("D1", "C1", n_train=0)
+    with pytest.raises(ValueError, match="n_test"):
+        make_dataset("D1", "C1", n_test=-5)
+    with pytest.raises(ValueError, match="max_blocks"):
+        make_dataset("D1", "C1", params=BlockWorldParams(max_blocks=27))
+    with pytest.raises(ValueError, match="sensor_noise"):
+        make_dataset("D1", "C1", params=BlockWorldParams(sensor_noise=-1.0))
+    with pytest.raises(ValueError, match="engine"):
+        make_dataset("D1", "C1", engine="clips")
+    assert not list(tmp_cache.iterdir())

@@ -1,0 +1,91 @@
+"""The atomic keyed cache: hits, misses, interrupted and corrupt writes."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sann import cache
+
+
+def _arrays() -> dict[str, np.ndarray]:
+    return {"x": np.arange(6, dtype=np.float32).reshape(2, 3), "s": np.array(["a", "bc"])}
+
+
+def test_roundtrip_and_keying(tmp_path: Path) -> None:
+    calls = []
+
+    def build() -> dict[str, np.ndarray]:
+        calls.append(1)
+        return _arrays()
+
+    desc = {"n": 3, "rules_sha256": "abc", "version": "v1"}
+    a, hit = cache.get_or_build("t", desc, build, directory=tmp_path)
+    assert not hit and len(calls) == 1
+    b, hit = cache.get_or_build("t", desc, build, directory=tmp_path)
+    assert hit and len(calls) == 1
+    assert np.array_equal(a["x"], b["x"]) and b["s"].tolist() == ["a", "bc"]
+    _, hit = cache.get_or_build("t", {**desc, "rules_sha256": "abd"}, build, directory=tmp_path)
+    assert not hit and len(calls) == 2  # another rule file: another entry
+
+
+def test_key_is_order_independent() -> None:
+    assert cache.make_key({"a": 1, "b": 2}) == cache.make_key({"b": 2, "a": 1})
+    assert cache.make_key({"a": 1}) != cache.make_key({"a": 2})
+
+
+def test_leftover_temp_file_is_not_trusted(tmp_path: Path) -> None:
+    key = cache.make_key({"n": 1})
+    final = cache.entry_path("t", key, tmp_path)
+    # an interrupted write leaves only a temporary file next to where the entry would be
+    tmp = tmp_path / f".{final.name}.xyz.tmp"
+    tmp.write_bytes(b"PK\x03\x04 half a zip")
+    assert cache.load("t", key, tmp_path) is None
+    old = 10_000.0
+    os.utime(tmp, (os.path.getmtime(tmp) - old, os.path.getmtime(tmp) - old))
+    cache.save("t", key, _arrays(), tmp_path)
+    assert not tmp.exists()  # stale temporaries are swept
+    assert cache.load("t", key, tmp_path) is not None
+    assert not list(tmp_path.glob("*.tmp")) and not list(tmp_path.glob(".*.tmp"))
+
+
+@pytest.mark.parametrize("damage", ["truncate", "garbage", "empty"])
+def test_corrupt_entry_is_rebuilt(tmp_path: Path, damage: str) -> None:
+    desc = {"n": 2}
+    cache.get_or_build("t", desc, _arrays, directory=tmp_path)
+    path = cache.entry_path("t", cache.make_key(desc), tmp_path)
+    data = path.read_bytes()
+    path.write_bytes({"truncate": data[: len(data) // 2], "garbage": b"not a zip at all",
+                      "empty": b""}[damage])
+    assert cache.load("t", cache.make_key(desc), tmp_path) is None
+    rebuilt, hit = cache.get_or_build("t", desc, _arrays, directory=tmp_path)
+    assert not hit and np.array_equal(rebuilt["x"], _arrays()["x"])
+    assert cache.load("t", cache.make_key(desc), tmp_path) is not None
+
+
+def test_entry_for_another_key_is_a_miss(tmp_path: Path) -> None:
+    k1, k2 = cache.make_key({"a": 1}), cache.make_key({"a": 2})
+    cache.save("t", k1, _arrays(), tmp_path)
+    # a file renamed onto k2's name still carries k1 inside: not trusted
+    cache.entry_path("t", k1, tmp_path).rename(cache.entry_path("t", k2, tmp_path))
+    assert cache.load("t", k2, tmp_path) is None
+
+
+def test_failed_write_leaves_nothing(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    def boom(src: str, dst: str) -> None:
+        raise OSError("disk full")
+
+    monkeypatch.setattr(cache.os, "replace", boom)
+    with pytest.raises(OSError, match="disk full"):
+        cache.save("t", cache.make_key({}), _arrays(), tmp_path)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_env_var_sets_directory(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("SANN_CACHE", str(tmp_path / "c"))
+    assert cache.cache_dir() == tmp_path / "c"
+    with pytest.raises(ValueError, match="file name"):
+        cache.entry_path("a/b", "k")
