@@ -34,7 +34,7 @@ from .instantiation import (
 )
 from .memory import WME, Identifier, IdentifierFactory, Symbol
 from .preferences import ACCEPTABLE, PROHIBIT, REJECT, REQUIRE, Preference, Slot, preference_type
-from .production import Command, Const, FuncCall, MakeAction, Production, Var
+from .production import Command, Condition, Const, FuncCall, MakeAction, Production, Var
 from .rhs import FUNCTIONS, format_value
 from .trace import print_identifier, trace_preference, trace_wme
 
@@ -318,6 +318,8 @@ class Agent:
         self._new_justifications: list[Instantiation] = []
         self._refs: dict[Identifier, int] = {}
         self._in_wm_phase = False
+        self._neg_watch: dict[tuple, list[tuple]] = {}
+        self._neg_keys: dict[Instantiation, list[tuple]] = {}
         self._dead_ids: list[Identifier] = []
         self._sources: weakref.WeakKeyDictionary[WME, Instantiation] = weakref.WeakKeyDictionary()
         self._unlinked: list[Identifier] = []
@@ -388,6 +390,8 @@ class Agent:
         self._wm[wme.timetag] = wme
         if type(value) is Identifier and value.level is None:
             self._refs[value] = self._refs.get(value, 0) + 1
+        if self._neg_watch:
+            self._check_negations(wme)
         self.matcher.add_wme(wme)
         self._wme_adds += 1
         if len(self._wm) > self._wm_max:
@@ -732,6 +736,12 @@ class Agent:
         if inst.goal.level > 1 and not any(p.live for p in inst.prefs):
             inst.goal.insts.discard(inst)
         if inst.is_justification:
+            for key in self._neg_keys.pop(inst, ()):
+                bucket = self._neg_watch.get(key)
+                if bucket is not None:
+                    bucket[:] = [entry for entry in bucket if entry[0] is not inst]
+                    if not bucket:
+                        del self._neg_watch[key]
             for wme in inst.grounds:
                 bucket = self._dependents.get(wme)
                 if bucket is not None and inst in bucket:
@@ -1186,7 +1196,10 @@ class Agent:
         the superstate WMEs the results depend on; its support is computed like a rule's:
         o-support when those WMEs include the selected operator of its goal."""
         self._justifications += 1
-        grounds = tuple(self._backtrace(inst, inst.goal.level, through_o_support=True))
+        visited: list[Instantiation] = []
+        grounds = tuple(
+            self._backtrace(inst, inst.goal.level, through_o_support=True, visited=visited)
+        )
         home = self._goal_of_grounds(grounds, results)
         operators = [
             w.value
@@ -1205,8 +1218,48 @@ class Agent:
         if not all(p.o_supported for p in just.prefs):
             for wme in grounds:
                 self._dependents.setdefault(wme, []).append(just)
+            self._watch_negations(just, visited, inst.goal.level)
         if home.level > 1:
             home.insts.add(just)
+
+    def _watch_negations(
+        self, just: Instantiation, visited: list[Instantiation], level: int
+    ) -> None:
+        """A justification also depends on the absence of what its instantiations' negated
+        conditions tested in superstates: watch for such a WME to appear."""
+        keys = []
+        for source in visited:
+            match = source.match
+            if match is None:
+                continue
+            bindings = match.bindings  # type: ignore[attr-defined]
+            for cond in match.production.conditions:  # type: ignore[attr-defined]
+                if not isinstance(cond, Condition) or not cond.negated:
+                    continue
+                if not isinstance(cond.id_test, Var) or not isinstance(cond.attr_test, Const):
+                    continue
+                ident = bindings.get(cond.id_test.name)
+                if not isinstance(ident, Identifier) or self._level_of(ident) >= level:
+                    continue
+                key = (ident, _vkey(cond.attr_test.value))
+                self._neg_watch.setdefault(key, []).append((just, cond.value_test, bindings))
+                keys.append(key)
+        self._neg_keys[just] = keys
+
+    def _check_negations(self, wme: WME) -> None:
+        watchers = self._neg_watch.get((wme.id, _vkey(wme.attr)))
+        if not watchers:
+            return
+        for just, test, bindings in list(watchers):
+            if just.retracted:
+                continue
+            if isinstance(test, Const) and _vkey(test.value) != _vkey(wme.value):
+                continue
+            if isinstance(test, Var):
+                bound = bindings.get(test.name)
+                if bound is not None and _vkey(bound) != _vkey(wme.value):
+                    continue
+            self._schedule_retraction(just)
 
     def _goal_of_grounds(self, grounds: tuple[WME, ...], results: list[Preference]) -> Goal:
         best = self._top
@@ -1220,10 +1273,18 @@ class Agent:
                 best = best.superstate
         return best
 
-    def _backtrace(self, inst: Instantiation, level: int, through_o_support: bool) -> list[WME]:
+    def _backtrace(
+        self,
+        inst: Instantiation,
+        level: int,
+        through_o_support: bool,
+        visited: list[Instantiation] | None = None,
+    ) -> list[WME]:
         """Superstate WMEs (identifier above ``level``) that ``inst`` depends on, found by
         walking back through the instantiations that made its local WMEs."""
         grounds: dict[int, WME] = {}
+        if visited is not None:
+            visited.append(inst)
         seen: set[int] = {id(inst)}
         stack = [inst]
         while stack:
@@ -1243,6 +1304,8 @@ class Agent:
                         continue
                     seen.add(id(source))
                     stack.append(source)
+                    if visited is not None:
+                        visited.append(source)
         return list(grounds.values())
 
     def _remember_source(self, wme: WME, slot: Slot, types: tuple[str, ...]) -> None:
