@@ -1184,28 +1184,44 @@ def _choose_index(plan: _Plan) -> None:
                   if spec[1] == "=" and spec[0][0] == "w" and spec[2][0] == "v"]
     if not candidates:
         return
-    best = min(candidates, key=lambda spec: _INDEX_PREFERENCE[spec[0][1]])  # type: ignore
+    # The most recently bound variable is usually the most selective key: joining
+    # (<il> ^block <o>) with both bound should look up <o>, not every block of <il>.
+    best = max(candidates, key=lambda spec: (spec[2][1], -_INDEX_PREFERENCE[spec[0][1]]))
     plan.beta.remove(best)
     plan.index = (best[2][1], best[0][1])  # type: ignore[assignment]
 
 
 def _join_cost(cond: Condition, bound: set[str]) -> int:
-    """Cheapest first: attribute and value fixed (a check), then attribute fixed."""
+    """Estimated fan-out class: 0 for a check (attribute and value fixed), 1 for a
+    constant attribute with a new value, 2 when a relational test must wait for a
+    variable bound later (the join cannot prune yet), 3 for a variable attribute."""
 
-    def fixed(test: Test) -> bool:
-        atoms = _atoms(test)
-        return any(isinstance(a, (Const, Disjunction)) for a in atoms) or bool(
-            bound.intersection(equality_vars(test)))
+    def fixed(test: Test) -> bool:  # binds nothing new: a constant, a check or a filter
+        return set(equality_vars(test)) <= bound
 
-    attr, value = fixed(cond.attr_test), fixed(cond.value_test)
-    return 0 if attr and value else 1 if attr else 2
+    if not fixed(cond.attr_test):
+        return 3
+    if not bound.intersection(equality_vars(cond.id_test)):
+        return 1  # joined on its bound value (see _join_order)
+    if fixed(cond.value_test):
+        return 0
+    own = set().union(*(equality_vars(t) for t in _fields(cond)))
+    pending = set().union(*(relational_vars(t) for t in _fields(cond))) - bound - own
+    return 2 if pending else 1
 
 
-def _join_order(elements: tuple[ConditionElement, ...], bound: set[str], scope: set[str],
+def _join_order(elements: tuple[ConditionElement, ...], bound: dict[str, int], scope: set[str],
                 first_fixed: bool) -> list[int]:
     """Most constrained first, keeping linkage: a positive condition joins on an identifier
-    already bound; negations go in as soon as the variables they share are bound."""
-    bound = set(bound)
+    already bound, or on its value when that is a bound variable and the attribute a constant
+    (a hashed "reverse" join: ``(<b> ^name <n>)`` with ``<n>`` bound finds the one block
+    instead of walking all of them; the identifier test becomes a check later on).
+    Negations go in as soon as the variables they share are bound.  Among
+    equally constrained conditions the one on the most recently bound identifier wins: it
+    follows the object just reached (whose attributes are usually single-valued) and binds
+    what pending negations wait for before fanning out elsewhere."""
+    age = {name: pos + 1 for name, pos in bound.items()}  # binding order, outer ones first
+    clock = len(bound) + 1
     remaining = list(range(len(elements)))
     order: list[int] = []
 
@@ -1215,7 +1231,18 @@ def _join_order(elements: tuple[ConditionElement, ...], bound: set[str], scope: 
         element = elements[index]
         if isinstance(element, Condition) and not element.negated:
             for test in _fields(element):
-                bound.update(equality_vars(test))
+                for name in equality_vars(test):
+                    age.setdefault(name, clock + len(order))
+
+    def recency(cond: Condition) -> int:
+        names = equality_vars(cond.id_test)
+        if not age.keys() & set(names):  # joined on its value
+            names = equality_vars(cond.value_test)
+        return max((age.get(name, -1) for name in names), default=-1)
+
+    def value_linked(cond: Condition) -> bool:
+        return (isinstance(cond.attr_test, Const)
+                and bool(age.keys() & set(equality_vars(cond.value_test))))
 
     if first_fixed and remaining:
         place(0)
@@ -1224,7 +1251,7 @@ def _join_order(elements: tuple[ConditionElement, ...], bound: set[str], scope: 
             element = elements[index]
             if isinstance(element, Condition) and not element.negated:
                 continue
-            if (_mentioned(element) & scope) <= bound:
+            if (_mentioned(element) & scope) <= age.keys():
                 place(index)
         positives = [i for i in remaining
                      if isinstance(elements[i], Condition) and not elements[i].negated]
@@ -1232,9 +1259,11 @@ def _join_order(elements: tuple[ConditionElement, ...], bound: set[str], scope: 
             if remaining:
                 place(remaining[0])
             continue
-        linked = [i for i in positives if bound.intersection(equality_vars(elements[i].id_test))]
+        linked = [i for i in positives if age.keys() & set(equality_vars(elements[i].id_test))
+                  or value_linked(elements[i])]
         pool = linked or [i for i in positives if elements[i].goal is not None] or positives
-        place(min(pool, key=lambda i: (_join_cost(elements[i], bound), i)))
+        place(min(pool, key=lambda i: (_join_cost(elements[i], set(age)),
+                                       -recency(elements[i]), i)))
     return order
 
 
@@ -1396,7 +1425,7 @@ class Rete:
     def _build_scope(self, elements: tuple[ConditionElement, ...], parent: _Node,
                      var_pos: dict[str, int], nvals: int, scope: set[str],
                      first_fixed: bool) -> tuple[_Node, list[int]]:
-        order = _join_order(elements, set(var_pos), scope, first_fixed)
+        order = _join_order(elements, var_pos, scope, first_fixed)
         deferred: list[tuple[int, str, str]] = []
         node = parent
         for index in order:
