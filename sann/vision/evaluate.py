@@ -36,6 +36,8 @@ __all__ = [
     "Frame",
     "make_frames",
     "evaluate_methods",
+    "draw_patches",
+    "draw_detections",
 ]
 
 POSITION_TOL_MM = 15.0
@@ -181,3 +183,95 @@ def evaluate_methods(frames: Sequence[Frame], configs: dict[str, DetectConfig],
             scores.append(evaluate_frame(found, f.true_poses, f.visible))
         out[name] = summarize(scores) | {"seconds_per_frame": float(np.mean(times))}
     return out
+
+
+def draw_patches(ax_image, ax_embedding, templates, template_id: int, modality: str = "color",
+                 method: str | None = None) -> np.ndarray:
+    """Fig. 10: a template's features on its rendering, coloured by patch; and the 2-D space
+    the patches were cut in (feature positions for k-means, the t-SNE embedding otherwise).
+
+    ``method`` overrides the template set's clustering (to show both on the same template).
+    Returns the patch labels drawn.
+    """
+    from sann.vision.camera import make_pose
+    from sann.vision.patch_linemod import _feature_descriptor, cluster_features, tsne_small
+    from sann.vision.render import render_cup
+
+    params = templates.params
+    method = method or params.clustering
+    feats = (templates.color_features if modality == "color"
+             else templates.depth_features)[template_id]
+    labels = cluster_features(feats, params.n_patches, method, params.seed)
+    pose = make_pose(templates.rotations[template_id],
+                     np.array([0.0, 0.0, templates.distances[template_id]]))
+    x0, y0 = templates.origins[template_id]
+    w, h = templates.sizes[template_id]
+    crop = render_cup(pose).rgb[y0: y0 + h + 1, x0: x0 + w + 1]
+    ax_image.imshow(crop)
+    ax_image.scatter(feats[:, 0], feats[:, 1], c=labels, cmap="tab10", s=28,
+                     vmin=0, vmax=9, edgecolors="black", linewidths=0.5)
+    ax_image.set_title(f"{method}: {params.n_patches} patches of {len(feats)} {modality} features")
+    ax_image.set_axis_off()
+    if ax_embedding is not None:
+        if method == "kmeans":
+            space, name = feats[:, :2].astype(float) * [1, -1], "feature position"
+        else:
+            perplexity = float(min(30.0, max(2.0, (len(feats) - 1) / 3.0)))
+            space, name = tsne_small(_feature_descriptor(feats), perplexity), "t-SNE embedding"
+        ax_embedding.scatter(space[:, 0], space[:, 1], c=labels, cmap="tab10", s=20, vmin=0,
+                             vmax=9)
+        ax_embedding.set_title(f"clustered in: {name}")
+        ax_embedding.set_xticks([])
+        ax_embedding.set_yticks([])
+    return labels
+
+
+def draw_detections(ax, depth_mm: np.ndarray, detections: Sequence[Detection], K: np.ndarray,
+                    true_poses: np.ndarray | None = None, n_points: int = 600) -> None:
+    """Fig. 11: estimated poses drawn over the depth image.
+
+    Each detection is shown as its cup's surface points facing the camera, projected at the
+    estimated pose, with its axis (bottom to lid) and its rank and score; true cups, when
+    given, are marked by a white cross at their centre.
+    """
+    from sann.vision.detect import cup_model_cloud
+
+    K = np.asarray(K, dtype=np.float64)
+    depth = np.asarray(depth_mm, dtype=np.float64)
+    valid = depth > 0
+    lo, hi = (np.percentile(depth[valid], [1, 99]) if valid.any() else (0.0, 1.0))
+    ax.imshow(np.where(valid, depth, hi), cmap="gray", vmin=lo, vmax=hi)
+    model = cup_model_cloud()
+    pick = np.linspace(0, len(model.points) - 1, n_points).astype(int)
+
+    def project(p):
+        return p[..., 0] * K[0, 0] / p[..., 2] + K[0, 2], p[..., 1] * K[1, 1] / p[..., 2] + K[1, 2]
+
+    colours = plt_colours(len(detections))
+    for rank, (det, colour) in enumerate(zip(detections, colours, strict=True)):
+        pts = model.points[pick] @ det.rotation.T + det.position_mm
+        nrm = model.normals[pick] @ det.rotation.T
+        facing = np.einsum("ij,ij->i", nrm, pts) < 0
+        u, v = project(pts[facing])
+        ax.scatter(u, v, s=2, color=colour)
+        ends = det.position_mm + np.outer([-60.0, 60.0], det.axis)
+        eu, ev = project(ends)
+        ax.annotate("", xy=(eu[1], ev[1]), xytext=(eu[0], ev[0]),
+                    arrowprops={"arrowstyle": "->", "color": colour, "lw": 1.5})
+        cu, cv = project(det.position_mm)
+        ax.text(cu, cv, f"{rank + 1}:{det.score:.0f}", color="white", fontsize=7,
+                ha="center", va="center", bbox={"facecolor": colour, "alpha": 0.7, "pad": 1})
+    if true_poses is not None and len(true_poses):
+        tu, tv = project(np.asarray(true_poses)[:, :3, 3])
+        ax.scatter(tu, tv, marker="x", color="white", s=30)
+    ax.set_xlim(0, depth.shape[1])
+    ax.set_ylim(depth.shape[0], 0)
+    ax.set_axis_off()
+
+
+def plt_colours(n: int) -> list:
+    """``n`` distinct colours (tab10, cycled)."""
+    import matplotlib
+
+    cmap = matplotlib.colormaps["tab10"]
+    return [cmap(i % 10) for i in range(n)]

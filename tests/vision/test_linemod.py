@@ -110,3 +110,18 @@ def test_bad_parameters_and_frames_are_rejected(small_set):
         match_templates(small_set, np.zeros((480, 640, 3), np.uint8), np.zeros((480, 640)))
     with pytest.raises(FileNotFoundError):
         load_templates("/nonexistent/templates.npz")
+
+
+def test_patch_figure_shows_the_patches_detection_uses(small_set):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from sann.vision.evaluate import draw_patches
+
+    fig, (a, b) = plt.subplots(1, 2)
+    labels = draw_patches(a, b, small_set, 5, "color")
+    assert np.array_equal(labels, small_set.color_patches[5])
+    assert len(a.collections) == 1 and len(b.collections) == 1
+    plt.close(fig)
