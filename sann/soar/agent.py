@@ -564,13 +564,16 @@ class Agent:
             if self.trace_level >= 3:
                 self._emit("\n--- Inner Elaboration Phase, active level 0 goal # ---\n")
         level_goal = goal
+        change_level = goal.level if goal is not None else 0
         while level_goal is not None:
             if self.trace_level >= 3:
                 self._emit(
                     f"\n--- Inner Elaboration Phase, active level {level_goal.level}"
                     f" goal {level_goal.id} ---\n"
                 )
-            self._fire_level(level_goal, firing)
+            limit = change_level if level_goal is not goal else 0
+            if self._fire_level(level_goal, firing, limit) and level_goal.level > change_level:
+                change_level = level_goal.level
             level_goal = level_goal.sub
         retractions, self._nil_retractions = self._nil_retractions, []
         if goal is not None:
@@ -583,17 +586,40 @@ class Agent:
         self._working_memory_phase()
         self._collect_changes()
 
-    def _fire_level(self, goal: Goal, firing: str) -> None:
+    def _fire_level(self, goal: Goal, firing: str, change_level: int) -> bool:
+        """Fire one level's pending assertions; return whether any were pending.
+
+        Below the active level, the kernel's waterfall postpones an instantiation that
+        would change an identifier at or above ``change_level`` (a level already changed in
+        this cycle): it stays pending for a later cycle."""
         queue = goal.pending_i if firing == "IE" else goal.pending_o
         if not queue:
-            return
+            return False
         matches = list(queue.items())
         queue.clear()
         fired: list[Instantiation] = []
         for match, info in reversed(matches):
+            if change_level and self._touches_level(match, info, change_level):
+                queue[match] = info
+                continue
             self._pending_goal.pop(match, None)
             fired.append(self._fire(match, info, goal))
         self._assert_preferences(fired)
+        return True
+
+    def _touches_level(self, match: object, info: ProductionInfo, change_level: int) -> bool:
+        bindings = match.bindings  # type: ignore[attr-defined]
+        for name in info.make_ids:
+            ident = bindings.get(name)
+            if isinstance(ident, Identifier) and self._level_of(ident) <= change_level:
+                if self.trace_level >= 5:
+                    self._emit(
+                        f"\n*** Waterfall: aborting firing because ({ident} * *) level"
+                        f" {self._level_of(ident)} is on or higher (lower int) than change"
+                        f" level {change_level}"
+                    )
+                return True
+        return False
 
     def _decision_phase(self) -> None:
         if self.trace_level >= 2:

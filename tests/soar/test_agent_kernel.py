@@ -57,6 +57,43 @@ sp {a (state <s> ^operator.name make) --> (<s> ^stage 1 ^thing <t>) (<t> ^part <
 sp {pdrop (state <s> ^stage 1) --> (<s> ^operator <o> +) (<o> ^name drop)}
 sp {adrop (state <s> ^operator.name drop ^thing <t>) --> (<s> ^thing <t> - ^stage 1 - 2)}
 """,
+    "state-no-change-proposes-in-superstate": """
+sp {top*elab (state <s> ^superstate nil) --> (<s> ^counter 0)}
+sp {sub*propose-in-super
+   (state <s> ^impasse no-change ^attribute state ^superstate <ss>)
+   (<ss> ^counter <c> -^done)
+-->
+   (<ss> ^operator <o> + =)
+   (<o> ^name from-sub)}
+sp {top*apply (state <s> ^operator <o>) (<o> ^name from-sub) --> (<s> ^done yes)}
+sp {top*halt (state <s> ^superstate nil ^done yes) --> (<s> ^operator <o> + >) (<o> ^name finish)}
+sp {top*fin (state <s> ^operator.name finish) --> (write |ok| (crlf)) (halt)}
+""",
+    "waterfall-postpones-results": """
+indifferent-selection --first
+sp {p (state <s> ^superstate nil -^count 3) --> (<s> ^operator <o1> + ^operator <o2> +
+   ^operator <o3> +) (<o1> ^name x ^v 1) (<o2> ^name y ^v 2) (<o3> ^name z ^v 3)}
+sp {init (state <s> ^superstate nil -^count) --> (<s> ^count 0)}
+sp {tie (state <s> ^impasse tie ^superstate <ss> ^item <i>) (<i> ^v <v>)
+   --> (<ss> ^operator <i> = (* <v> 0.1))}
+sp {app (state <s> ^operator <o> ^count <c>) (<o> ^name <n>)
+   --> (<s> ^count <c> - (+ <c> 1)) (write <n> (crlf))}
+sp {done (state <s> ^count 3) --> (halt)}
+""",
+    "substate-inner-elaboration-and-gds": """
+sp {p (state <s> ^superstate nil ^phase <p>) --> (<s> ^operator <o> +) (<o> ^name work ^phase <p>)}
+sp {init (state <s> ^superstate nil -^phase) --> (<s> ^operator <o> +) (<o> ^name init)}
+sp {init*a (state <s> ^operator.name init) --> (<s> ^phase 1)}
+sp {sub*p (state <s> ^superstate.operator.name work -^local) --> (<s> ^operator <o> +)
+   (<o> ^name mk)}
+sp {sub*a (state <s> ^operator.name mk) --> (<s> ^local <l>) (<l> ^x 1)}
+sp {sub*p2 (state <s> ^local <l> ^superstate <ss>) (<ss> ^phase <p> < 4)
+   --> (<s> ^operator <o> +) (<o> ^name bump)}
+sp {sub*a2 (state <s> ^operator.name bump ^superstate <ss>) (<ss> ^phase <p>)
+   --> (<ss> ^phase <p> - (+ <p> 1))}
+sp {fin (state <s> ^superstate nil ^phase 4) --> (<s> ^operator <o> + >) (<o> ^name fin)}
+sp {fin*a (state <s> ^operator.name fin) --> (halt)}
+""",
 }
 
 
@@ -107,7 +144,7 @@ def _decision_lines(trace: str) -> list[str]:
 
 @pytest.mark.parametrize("name", sorted(AGENTS))
 def test_agrees_with_kernel(name: str, tmp_path) -> None:
-    theirs, their_trace = kernel_run(AGENTS[name], 6, tmp_path)
-    ours, our_trace = our_run(AGENTS[name], 6)
+    theirs, their_trace = kernel_run(AGENTS[name], 15, tmp_path)
+    ours, our_trace = our_run(AGENTS[name], 15)
     assert ours == theirs
     assert _decision_lines(our_trace) == _decision_lines(their_trace)
