@@ -7,7 +7,8 @@ Usage::
 In one process and one run, on the same inputs, it times:
 
 (a) Towers of Hanoi, ``rules/hanoi.soar`` with 11 disks (2,047 moves, 2,060 decisions):
-    source the rules and run to halt. Target ours/Soar <= 10x, goal 3x.
+    source the rules and run to halt; best of 3 runs per engine. Target ours/Soar <= 10x,
+    goal 3x.
 (b) A blocks planner over 2,000 random 26-block scenes: each scene is put on the input-link
     through the engine's input API, the agent runs to halt, the plan is read back from the
     output-link, the input is removed and the agent re-initialised. Target <= 3x, goal 1x.
@@ -263,6 +264,11 @@ def timed(fn: Callable[[], Any]) -> tuple[float, Any]:
     return time.perf_counter() - t0, value
 
 
+def best_of(repeat: int, fn: Callable[[], Any]) -> tuple[float, Any]:
+    """The fastest of ``repeat`` runs (the machine is shared; the minimum is the least noisy)."""
+    return min((timed(fn) for _ in range(repeat)), key=lambda pair: pair[0])
+
+
 def run_planner(planner: Any, scenes: list[Scene]) -> tuple[float, int]:
     """Seconds for all scenes, and how many plans were wrong."""
     wrong = 0
@@ -292,10 +298,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--disks", type=int, default=11)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--reps", type=int, default=300, help="repetitions per WME-cost point")
+    parser.add_argument("--repeat", type=int, default=3, help="hanoi runs per engine (best)")
     parser.add_argument("--kernel-only", action="store_true")
     args = parser.parse_args(argv)
-    if not 1 <= args.disks <= 20 or args.scenes < 1:
-        parser.error("--disks must be 1..20 and --scenes positive")
+    if not 1 <= args.disks <= 20 or args.scenes < 1 or args.repeat < 1 or args.reps < 1:
+        parser.error("--disks must be 1..20; --scenes, --repeat and --reps positive")
     ours = not args.kernel_only
     if ours:
         try:
@@ -304,11 +311,12 @@ def main(argv: list[str] | None = None) -> int:
             print(f"our engine is not importable ({exc}); measuring the kernel only")
             ours = False
 
-    print(f"(a) Towers of Hanoi, {args.disks} disks ({HANOI.relative_to(ROOT)})")
-    k_time, (k_dec, k_out) = timed(lambda: kernel_hanoi(args.disks))
+    hanoi = HANOI.relative_to(ROOT)
+    print(f"(a) Towers of Hanoi, {args.disks} disks ({hanoi}), best of {args.repeat}")
+    k_time, (k_dec, k_out) = best_of(args.repeat, lambda: kernel_hanoi(args.disks))
     print(f"    Soar kernel: {k_time:8.3f} s  {k_dec} decisions  {k_out.strip()}")
     if ours:
-        o_time, (o_dec, o_out) = timed(lambda: our_hanoi(args.disks))
+        o_time, (o_dec, o_out) = best_of(args.repeat, lambda: our_hanoi(args.disks))
         ratio = o_time / k_time
         print(f"    ours:        {o_time:8.3f} s  {o_dec} decisions  {o_out.strip()}")
         print(f"    ratio ours/Soar = {ratio:.2f}x  -> {verdict(ratio, 10, 3)}")
