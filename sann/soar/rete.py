@@ -542,26 +542,29 @@ def _index_remove(index: dict, key: object, item: object) -> None:
         del index[key]
 
 
-class _Token:
-    """A partial match.  ``extra`` depends on the node: the blocking WMEs of a negative-node
-    token, the results of an NCC owner, the owner of an NCC partner result, the Match of a
-    production-node token."""
+class _Token(list):
+    """A partial match, as a list for speed (a list is built in C; an object with six
+    attributes costs twice as much, and the Rete makes and drops tokens all the time):
 
-    __slots__ = ("parent", "wme", "vals", "node", "children", "extra")
+    ``[parent, wme, vals, node, children, extra]`` — ``vals`` is the tuple of variable
+    values bound so far, ``node`` the beta node that owns it (``None`` once deleted),
+    ``children`` a dict of child tokens or None, and ``extra`` depends on the node: the
+    blocking WMEs of a negative-node token, the results of an NCC owner, the owner of an NCC
+    partner result, the Match of a production-node token.  Hashed by identity."""
 
-    def __init__(self, parent: _Token | None, wme: WME | None, vals: tuple, node: object) -> None:
-        self.parent = parent
-        self.wme = wme
-        self.vals = vals
-        self.node = node
-        self.children: dict[_Token, None] | None = None
-        self.extra: object = None
+    __slots__ = ()
+    __hash__ = object.__hash__  # type: ignore[assignment]
+    __eq__ = object.__eq__  # type: ignore[assignment]
+
+
+# Field numbers of a _Token (the hot loops below use the literals).
+_PARENT, _WME, _VALS, _NODE, _CHILDREN, _EXTRA = range(6)
 
 
 def _adopt(parent: _Token, tok: _Token) -> None:
-    children = parent.children
+    children = parent[4]
     if children is None:
-        parent.children = {tok: None}
+        parent[4] = {tok: None}
     else:
         children[tok] = None
 
@@ -631,7 +634,7 @@ class _Node:
         if index is None:
             index = {}
             for tok in self.tokens:
-                _index_add(index, _hkey(tok.vals[pos]), tok)
+                _index_add(index, _hkey(tok[2][pos]), tok)
             self.indexes[pos] = index
             self.index_list.append((pos, index))
         return index
@@ -640,7 +643,7 @@ class _Node:
         """Add an active output token and pass it to the children."""
         self.tokens[tok] = None
         if self.index_list:
-            vals = tok.vals
+            vals = tok[2]
             for pos, index in self.index_list:
                 key = vals[pos]
                 if key.__class__ is float:
@@ -653,27 +656,36 @@ class _Node:
         for child in self.children:
             child.left_activate(tok)
 
-    def unstore(self, tok: _Token) -> None:
+    def forget(self, tok: _Token) -> None:
+        """Drop an active output token from the memory and its indices."""
         del self.tokens[tok]
         if self.index_list:
-            vals = tok.vals
+            vals = tok[2]
             for pos, index in self.index_list:
-                _index_remove(index, _hkey(vals[pos]), tok)
+                key = vals[pos]
+                if key.__class__ is float:
+                    key = (_FLOAT, key)
+                bucket = index[key]
+                del bucket[tok]
+                if not bucket:
+                    del index[key]
+
+    unstore = forget
 
     def all_tokens(self) -> list[_Token]:
         return list(self.tokens)
-
-    def forget(self, tok: _Token) -> None:
-        self.unstore(tok)
 
     def left_activate(self, tok: _Token) -> None:  # the root has no parent
         raise AssertionError("the root node is never activated")
 
 
 class _JoinNode(_Node):
-    """Joins parent tokens with the WMEs of an alpha memory, hashed on one equality test."""
+    """Joins parent tokens with the WMEs of an alpha memory, hashed on one equality test.
+    Both activations build the new tokens inline: this is the innermost loop of the
+    matcher."""
 
-    __slots__ = ("amem", "pos", "getter", "amem_index", "parent_index", "check", "extend")
+    __slots__ = ("amem", "pos", "getter", "amem_index", "parent_index", "check", "extend",
+                 "registry")
 
     def __init__(self, rete: Rete, parent: _Node, key: object, amem: _AlphaMemory,
                  index: tuple[int, str] | None, check: Callable | None,
@@ -682,6 +694,7 @@ class _JoinNode(_Node):
         self.amem = amem
         self.check = check
         self.extend = extend
+        self.registry = rete._wme_info
         if index is None:
             self.pos = -1
             self.getter = None
@@ -694,8 +707,9 @@ class _JoinNode(_Node):
             self.parent_index = parent.index(self.pos)
 
     def left_activate(self, t: _Token) -> None:
+        vals = t[2]
         if self.pos >= 0:
-            key = t.vals[self.pos]
+            key = vals[self.pos]
             if key.__class__ is float:
                 key = (_FLOAT, key)
             bucket = self.amem_index.get(key)
@@ -703,11 +717,24 @@ class _JoinNode(_Node):
                 return
         else:
             bucket = self.amem.wmes
-        check = self.check
-        vals = t.vals
+        check, extend, registry = self.check, self.extend, self.registry
+        tokens, index_list, children = self.tokens, self.index_list, self.children
         for wme in bucket:
-            if check is None or check(vals, wme):
-                self.emit(t, wme)
+            if check is not None and not check(vals, wme):
+                continue
+            tok = _Token((t, wme, vals if extend is None else extend(vals, wme), self, None,
+                          None))
+            siblings = t[4]
+            if siblings is None:
+                t[4] = {tok: None}
+            else:
+                siblings[tok] = None
+            registry[wme][1][tok] = None
+            tokens[tok] = None
+            if index_list:
+                self._index_token(tok)
+            for child in children:
+                child.left_activate(tok)
 
     def right_activate(self, wme: WME) -> None:
         if self.pos >= 0:
@@ -719,26 +746,38 @@ class _JoinNode(_Node):
                 return
         else:
             bucket = self.parent.tokens
-        check = self.check
+        check, extend = self.check, self.extend
+        tokens, index_list, children = self.tokens, self.index_list, self.children
+        built = self.registry[wme][1]
         for t in bucket:
-            if check is None or check(t.vals, wme):
-                self.emit(t, wme)
-
-    def emit(self, t: _Token, wme: WME) -> None:
-        extend = self.extend
-        tok = _Token(t, wme, t.vals if extend is None else extend(t.vals, wme), self)
-        children = t.children
-        if children is None:
-            t.children = {tok: None}
-        else:
-            children[tok] = None
-        info = self.rete._wme_info[wme]
-        built = info[1]
-        if built is None:
-            info[1] = {tok: None}
-        else:
+            vals = t[2]
+            if check is not None and not check(vals, wme):
+                continue
+            tok = _Token((t, wme, vals if extend is None else extend(vals, wme), self, None,
+                          None))
+            siblings = t[4]
+            if siblings is None:
+                t[4] = {tok: None}
+            else:
+                siblings[tok] = None
             built[tok] = None
-        self.store(tok)
+            tokens[tok] = None
+            if index_list:
+                self._index_token(tok)
+            for child in children:
+                child.left_activate(tok)
+
+    def _index_token(self, tok: _Token) -> None:
+        vals = tok[2]
+        for pos, index in self.index_list:
+            key = vals[pos]
+            if key.__class__ is float:
+                key = (_FLOAT, key)
+            bucket = index.get(key)
+            if bucket is None:
+                index[key] = {tok: None}
+            else:
+                bucket[tok] = None
 
 
 class _NegativeNode(_Node):
@@ -766,11 +805,12 @@ class _NegativeNode(_Node):
         return list(self.every)
 
     def left_activate(self, t: _Token) -> None:
-        tok = _Token(t, None, t.vals, self)
+        vals = t[2]
+        tok = _Token((t, None, vals, self, None, None))
         _adopt(t, tok)
         self.every[tok] = None
         if self.pos >= 0:
-            key = _hkey(t.vals[self.pos])
+            key = _hkey(vals[self.pos])
             _index_add(self.every_index, key, tok)
             bucket = self.amem_index.get(key)
         else:
@@ -778,7 +818,6 @@ class _NegativeNode(_Node):
         blockers = None
         if bucket:
             check = self.check
-            vals = t.vals
             for wme in bucket:
                 if check is None or check(vals, wme):
                     if blockers is None:
@@ -787,7 +826,7 @@ class _NegativeNode(_Node):
         if blockers is None:
             self.store(tok)
             return
-        tok.extra = blockers
+        tok[5] = blockers
         info = self.rete._wme_info
         for wme in blockers:
             _block(info[wme], tok)
@@ -802,10 +841,10 @@ class _NegativeNode(_Node):
         check = self.check
         info = self.rete._wme_info[wme]
         for tok in bucket:
-            if check is None or check(tok.vals, wme):
-                blockers = tok.extra
+            if check is None or check(tok[2], wme):
+                blockers = tok[5]
                 if blockers is None:
-                    tok.extra = {wme: None}
+                    tok[5] = {wme: None}
                     self.unstore(tok)
                     self.rete._delete_children(tok)
                 else:
@@ -813,18 +852,18 @@ class _NegativeNode(_Node):
                 _block(info, tok)
 
     def unblock(self, tok: _Token) -> None:
-        tok.extra = None
+        tok[5] = None
         self.store(tok)
 
     def forget(self, tok: _Token) -> None:
         del self.every[tok]
         if self.pos >= 0:
-            _index_remove(self.every_index, _hkey(tok.vals[self.pos]), tok)
-        if tok.extra is None:
+            _index_remove(self.every_index, _hkey(tok[2][self.pos]), tok)
+        if tok[5] is None:
             self.unstore(tok)
             return
         info = self.rete._wme_info
-        for wme in tok.extra:
+        for wme in tok[5]:
             record = info.get(wme)
             if record is not None and record[2]:
                 record[2].pop(tok, None)
@@ -853,41 +892,41 @@ class _NCCNode(_Node):
         return list(self.owners.values())
 
     def left_activate(self, t: _Token) -> None:
-        tok = _Token(t, None, t.vals, self)
+        tok = _Token((t, None, t[2], self, None, None))
         _adopt(t, tok)
         self.owners[t] = tok
         results = self.partner.buffer.pop(t, None)  # type: ignore[union-attr]
         if results:
-            tok.extra = results
+            tok[5] = results
             for result in results:
-                result.extra = tok
+                result[5] = tok
         else:
             self.store(tok)
 
     def block(self, owner: _Token, result: _Token) -> None:
-        results = owner.extra
+        results = owner[5]
         if results is None:
-            owner.extra = {result: None}
+            owner[5] = {result: None}
             self.unstore(owner)
             self.rete._delete_children(owner)
         else:
-            results[result] = None  # type: ignore[index]
+            results[result] = None
 
     def release(self, owner: _Token, result: _Token) -> None:
-        results = owner.extra
-        del results[result]  # type: ignore[attr-defined]
+        results = owner[5]
+        del results[result]
         # An owner whose parent is being deleted stays blocked (and unstored) until its turn.
-        if not results and owner.parent.node is not None:  # type: ignore[union-attr]
-            owner.extra = None
+        if not results and owner[0][3] is not None:
+            owner[5] = None
             self.store(owner)
 
     def forget(self, tok: _Token) -> None:
-        del self.owners[tok.parent]
-        if tok.extra is None:
+        del self.owners[tok[0]]
+        if tok[5] is None:
             self.unstore(tok)
             return
-        for result in tok.extra:  # type: ignore[attr-defined]
-            result.extra = None
+        for result in tok[5]:
+            result[5] = None
 
 
 class _PartnerNode(_Node):
@@ -905,11 +944,11 @@ class _PartnerNode(_Node):
     def _owner_key(self, bottom: _Token) -> _Token:
         t = bottom
         for _ in range(self.levels):
-            t = t.parent  # type: ignore[assignment]
+            t = t[0]
         return t
 
     def left_activate(self, bottom: _Token) -> None:
-        result = _Token(bottom, None, (), self)
+        result = _Token((bottom, None, (), self, None, None))
         _adopt(bottom, result)
         self.tokens[result] = None
         t = self._owner_key(bottom)
@@ -921,44 +960,48 @@ class _PartnerNode(_Node):
             else:
                 waiting[result] = None
             return
-        result.extra = owner
+        result[5] = owner
         self.ncc.block(owner, result)
 
     def forget(self, result: _Token) -> None:
         del self.tokens[result]
-        owner = result.extra
+        owner = result[5]
         if owner is None:
-            waiting = self.buffer.get(self._owner_key(result.parent))  # type: ignore[arg-type]
+            waiting = self.buffer.get(self._owner_key(result[0]))
             if waiting is not None:
                 waiting.pop(result, None)
-        elif owner.node is not None:  # type: ignore[attr-defined]
-            self.ncc.release(owner, result)  # type: ignore[arg-type]
+        elif owner[3] is not None:
+            self.ncc.release(owner, result)
 
 
 class _ProductionNode(_Node):
     """Bottom of a production: each token is a Match."""
 
-    __slots__ = ("production", "layout")
+    __slots__ = ("production", "layout", "changes")
 
     def __init__(self, rete: Rete, parent: _Node, production: Production,
                  layout: _Layout) -> None:
         super().__init__(rete, parent, ("production", production.name))
         self.production = production
         self.layout = layout
+        self.changes = rete._changes
 
     def left_activate(self, t: _Token) -> None:
-        tok = _Token(t, None, t.vals, self)
-        _adopt(t, tok)
         match = Match(self.production)
         match._token = t
         match._layout = self.layout
-        tok.extra = match
+        tok = _Token((t, None, None, self, None, match))
+        siblings = t[4]
+        if siblings is None:
+            t[4] = {tok: None}
+        else:
+            siblings[tok] = None
         self.tokens[tok] = None
-        self.rete._changes.added[match] = None
+        self.changes.added[match] = None
 
     def forget(self, tok: _Token) -> None:
         del self.tokens[tok]
-        self.rete._changes.retract(tok.extra)  # type: ignore[arg-type]
+        self.changes.retract(tok[5])
 
 
 class _Layout:
@@ -973,12 +1016,12 @@ class _Layout:
     def wmes_of(self, tok: _Token) -> tuple[WME | None, ...]:
         out: list[WME | None] = [None] * len(self.order)
         for index in reversed(self.order):
-            out[index] = tok.wme
-            tok = tok.parent  # type: ignore[assignment]
+            out[index] = tok[1]
+            tok = tok[0]
         return tuple(out)
 
     def bindings_of(self, tok: _Token) -> dict[str, Symbol]:
-        vals = tok.vals
+        vals = tok[2]
         return {name: vals[pos] for name, pos in self.bindings}
 
 
@@ -1281,7 +1324,7 @@ class Rete:
     def __init__(self, check_links: bool = True) -> None:
         self.check_links = check_links
         self._root = _Node(self, None)
-        self._root_token = _Token(None, None, (), self._root)
+        self._root_token = _Token((None, None, (), self._root, None, None))
         self._root.tokens[self._root_token] = None
         self._pnodes: dict[str, _ProductionNode] = {}
         self._amems: dict[tuple, _AlphaMemory] = {}
@@ -1319,7 +1362,7 @@ class Rete:
         if wme in self._wme_info:
             raise ValueError(f"{wme!r} is already in working memory")
         amems: list[_AlphaMemory] = []
-        self._wme_info[wme] = [amems, None, None]
+        self._wme_info[wme] = [amems, {}, None]
         for amem in self._alpha_candidates(wme):
             accept = amem.accept
             if accept is None or accept(wme):
@@ -1337,15 +1380,15 @@ class Rete:
         built = info[1]
         if built:
             for tok in built:
-                if tok.node is not None:
-                    tok.parent.children.pop(tok, None)
+                if tok[3] is not None:
+                    del tok[0][4][tok]
                     self._delete_tokens([tok])
         blocked = info[2]
         if blocked:
             for tok in blocked:
-                node = tok.node
+                node = tok[3]
                 if node is not None:
-                    blockers = tok.extra
+                    blockers = tok[5]
                     del blockers[wme]
                     if not blockers:
                         node.unblock(tok)
@@ -1357,7 +1400,7 @@ class Rete:
         pnode = self._pnodes.get(name)
         if pnode is None:
             raise KeyError(f"no production named {name!r}")
-        return [tok.extra for tok in pnode.tokens]  # type: ignore[misc]
+        return [tok[5] for tok in pnode.tokens]
 
     def productions(self) -> list[Production]:
         return [pnode.production for pnode in self._pnodes.values()]
@@ -1490,8 +1533,8 @@ class Rete:
             return
         parent = node.parent
         for tok in node.all_tokens():
-            if tok.node is not None:
-                tok.parent.children.pop(tok, None)  # type: ignore[union-attr]
+            if tok[3] is not None:
+                tok[0][4].pop(tok, None)
                 self._delete_tokens([tok])
         parent.children.remove(node)
         if parent.child_map.get(node.key) is node:
@@ -1507,30 +1550,42 @@ class Rete:
         self._remove_node(parent)
 
     def _delete_children(self, tok: _Token) -> None:
-        children = tok.children
+        children = tok[4]
         if children:
-            tok.children = None
+            tok[4] = None
             self._delete_tokens(list(children))
 
     def _delete_tokens(self, stack: list[_Token]) -> None:
         """Delete tokens (already detached from their parents) and all their descendants.
-        A token is marked dead before its descendants are visited, which an NCC owner
-        relies on (see _NCCNode.release)."""
+        A token is marked dead (node None) before its descendants are visited, which an NCC
+        owner relies on (see _NCCNode.release).  Join-node tokens, the bulk, are dropped
+        inline."""
         info = self._wme_info
+        join = _JoinNode
         while stack:
             tok = stack.pop()
-            node = tok.node
+            node = tok[3]
             if node is None:
                 continue
-            node.forget(tok)
-            tok.node = None
-            wme = tok.wme
-            if wme is not None:
-                record = info.get(wme)
-                if record is not None and record[1]:
-                    record[1].pop(tok, None)
-            children = tok.children
+            if node.__class__ is join:
+                del node.tokens[tok]
+                if node.index_list:
+                    vals = tok[2]
+                    for pos, index in node.index_list:
+                        key = vals[pos]
+                        if key.__class__ is float:
+                            key = (_FLOAT, key)
+                        bucket = index[key]
+                        del bucket[tok]
+                        if not bucket:
+                            del index[key]
+                record = info.get(tok[1])
+                if record is not None:
+                    del record[1][tok]
+            else:
+                node.forget(tok)
+            tok[3] = None
+            children = tok[4]
             if children:
-                tok.children = None
+                tok[4] = None
                 stack.extend(children)
-
