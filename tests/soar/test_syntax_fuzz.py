@@ -9,6 +9,7 @@ from __future__ import annotations
 import string
 from pathlib import Path
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -31,6 +32,8 @@ from sann.soar.production import (
 from sann.soar.syntax import KNOWN_RHS_FUNCTIONS, parse
 
 ROOT = Path(__file__).resolve().parents[2]
+# Mutations often make a preference land on a non-operator attribute: the kernel's warning.
+pytestmark = pytest.mark.filterwarnings("ignore::sann.soar.errors.SoarWarning")
 FUZZ = settings(
     derandomize=True,
     max_examples=300,
