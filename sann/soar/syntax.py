@@ -717,8 +717,18 @@ _READABLE = {
 }  # fmt: skip
 
 
+_CONSTANTS = {"symbol", "integer", "float", "|string|"}
+_RELATIONS = {"'<>'", "'<'", "'>'", "'<='", "'>='", "'<=>'", "'@'", "'!@'", "'='"}
+
+
 def _readable(names: Collection[str]) -> tuple[str, ...]:
-    return tuple(sorted({_READABLE.get(name, name) for name in names}))
+    """Terminal names -> words, with the usual groups said once ("constant", "relation")."""
+    words = {_READABLE.get(name, name) for name in names}
+    if _CONSTANTS <= words:
+        words = (words - _CONSTANTS) | {"constant"}
+    if _RELATIONS <= words:
+        words = (words - _RELATIONS) | {"relation (<> < > <= >= <=> = @ !@)"}
+    return tuple(sorted(words))
 
 
 def _source_line(text: str, line: int) -> str:

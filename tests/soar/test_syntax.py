@@ -485,7 +485,7 @@ def test_expected_tokens_are_words_not_lark_names() -> None:
     error = _syntax_error("sp {p (state <s> ^a b) -> }")
     assert error.expected == ("'('", "'-'", "'-->'", "'{'")
     error = _syntax_error("sp {p (state <s> ^ ) --> }")
-    assert "variable" in error.expected and "symbol" in error.expected
+    assert "variable" in error.expected and "constant" in error.expected
     assert not any(name.isupper() for name in error.expected)
 
 
