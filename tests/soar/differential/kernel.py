@@ -226,11 +226,13 @@ def parse_internal(text: str) -> list[tuple[str, Value, Value, bool]]:
         if not match:
             continue
         ident, rest = match.group(2), match.group(3)
-        tokens = _TOKEN.findall(rest)
-        if len(tokens) < 2 or not tokens[0].startswith("^"):
+        if not rest.startswith("^"):
             raise ValueError(f"unexpected WME line from the kernel: {line!r}")
-        acc = len(tokens) == 3 and tokens[2] == "+"
-        wmes.append((ident, parse_symbol(tokens[0][1:]), parse_symbol(tokens[1]), acc))
+        tokens = _TOKEN.findall(rest[1:])
+        if len(tokens) not in (2, 3) or (len(tokens) == 3 and tokens[2] != "+"):
+            raise ValueError(f"unexpected WME line from the kernel: {line!r}")
+        acc = len(tokens) == 3
+        wmes.append((ident, parse_symbol(tokens[0]), parse_symbol(tokens[1]), acc))
     return wmes
 
 
