@@ -852,14 +852,16 @@ def parse_file(path: str | Path, functions: Collection[str] = KNOWN_RHS_FUNCTION
     return parse(path.read_text(encoding="utf-8"), str(path), functions)
 
 
-def parse_production(text: str, functions: Collection[str] = KNOWN_RHS_FUNCTIONS) -> Production:
+def parse_production(
+    text: str, file: str = "<string>", functions: Collection[str] = KNOWN_RHS_FUNCTIONS
+) -> Production:
     """Parse text that holds exactly one ``sp {...}`` and nothing else."""
-    items = parse(text, functions=functions)
+    items = parse(text, file, functions)
     if len(items) != 1 or not isinstance(items[0], Production):
         kinds = ", ".join(type(item).__name__ for item in items) or "nothing"
         location = next((i.location for i in items if i.location), None)
         line, column = (location.line, location.column) if location else (1, 1)
         raise _syntax_error(
-            text, "<string>", f"expected exactly one production, found {kinds}", line, column
+            text, file, f"expected exactly one production, found {kinds}", line, column
         )
     return items[0]
