@@ -201,7 +201,10 @@ def _argument(item: str) -> str:
 
 
 class _ToDataclasses(Transformer):
-    """Lark tree -> production dataclasses, one small method per grammar rule."""
+    """Grammar rules -> production dataclasses, one small method per rule.
+
+    Used as Lark's inline transformer: the LALR parser calls a method at each reduction with
+    the already-transformed children, so no parse tree is built."""
 
     def __init__(self) -> None:
         super().__init__()
@@ -269,10 +272,19 @@ class _ToDataclasses(Transformer):
         return Const(_unescape(items[0][1:-1]))
 
     def integer(self, items: list) -> Const:
-        return Const(int(items[0]))
+        value = int(items[0])
+        if not -(2**63) <= value < 2**63:  # the kernel says "bad integer" and stores garbage
+            raise self._number_error(items[0], "integer does not fit in 64 bits")
+        return Const(value)
 
     def float(self, items: list) -> Const:
-        return Const(float(_float_text(items[0])))
+        value = float(_float_text(items[0]))
+        if value in (float("inf"), float("-inf")):
+            raise self._number_error(items[0], "float is too large")
+        return Const(value)
+
+    def _number_error(self, token: Token, problem: str) -> SoarSyntaxError:
+        return self._syntax_error(f"bad number '{token}': {problem}", token.line, token.column)
 
     def relation(self, items: list) -> str:
         return str(items[0])

@@ -234,7 +234,9 @@ def test_tests_in_identifier_and_attribute_positions() -> None:
     ("text", "value"),
     [
         ("12", 12), ("-3", -3), ("+4", 4), ("1.5", 1.5), ("-2.5", -2.5), (".5", 0.5),
-        ("-.5", -0.5), ("5.", 5.0), ("1.5e2", 150.0), ("1.5e", 1.5), ("1e3", "1e3"),
+        ("-.5", -0.5),
+        ("9223372036854775807", 2**63 - 1), ("-9223372036854775808", -(2**63)),
+        ("5.", 5.0), ("1.5e2", 150.0), ("1.5e", 1.5), ("1e3", "1e3"),
         ("abc", "abc"), ("|abc|", "abc"), ("|12|", "12"), ("s1", "S1"), ("O23", "O23"),
         ("|s1|", "s1"), ("x@y", "x@y"), ("a-b*c/d:e?f%g$h&i", "a-b*c/d:e?f%g$h&i"),
         (r"|a\|b\\c|", "a|b\\c"), ("|a#b|", "a#b"), ("||", ""), ("-a", "-a"),
@@ -466,6 +468,8 @@ def _syntax_error(text: str) -> SoarSyntaxError:
         ("sp {p (state <s> ^a b\u0001) --> }", 1, 22, ["'\\x01'"]),
         ("sp {p (state <s> ^a |unterminated) --> }", 1, 21, ["unterminated string"]),
         ("sp", 1, 3, ["'{'"]),
+        ("sp {p (state <s> ^a 9223372036854775808) --> }", 1, 21, ["64 bits"]),
+        ("sp {p (state <s> ^a -1.0e999) --> }", 1, 21, ["too large"]),
     ],
 )
 def test_syntax_errors_have_position_caret_and_words(text, line, column, words) -> None:
