@@ -603,7 +603,7 @@ class Agent:
                 queue[match] = info
                 continue
             self._pending_goal.pop(match, None)
-            fired.append(self._fire(match, info, goal))
+            fired.append(self._fire(match, info, goal, firing == "PE"))
         self._assert_preferences(fired)
         return True
 
@@ -649,20 +649,34 @@ class Agent:
                     goal.pending_o.pop(match, None)
                 continue
             self._schedule_retraction(inst)
+        if not new:
+            return
+        top = self._top
+        only_top = top.sub is None
+        productions = self._productions
+        pending_goal = self._pending_goal
         for match in new:
-            wmes = match.wmes
-            ident = match_goal(wmes)
-            goal = self._goals.get(ident) if ident is not None else None
-            if goal is None or not goal.alive:
-                continue
-            info = self._productions.get(match.production.name)
+            info = productions.get(match.production.name)
             if info is None:
                 continue
+            if only_top:
+                goal = top  # every state-linked match belongs to the only state
+                if not info.operator_conditions and info.declared is None:
+                    top.pending_i[match] = info
+                    pending_goal[match] = top
+                    continue
+                wmes = match.wmes
+            else:
+                wmes = match.wmes
+                ident = match_goal(wmes)
+                goal = self._goals.get(ident) if ident is not None else None
+                if goal is None or not goal.alive:
+                    continue
             if is_o_supported(info, wmes, goal.id, match):
                 goal.pending_o[match] = info
             else:
                 goal.pending_i[match] = info
-            self._pending_goal[match] = goal
+            pending_goal[match] = goal
 
     def _schedule_retraction(self, inst: Instantiation) -> None:
         if inst.retracted:
@@ -675,10 +689,12 @@ class Agent:
 
     # ------------------------------------------------------------- firing
 
-    def _fire(self, match: object, info: ProductionInfo, goal: Goal) -> Instantiation | None:
+    def _fire(
+        self, match: object, info: ProductionInfo, goal: Goal, o_support: bool
+    ) -> Instantiation:
+        """Fire a match (``o_support``: it was queued as an o-assertion)."""
         wmes = match.wmes  # type: ignore[attr-defined]
         name = info.production.name
-        o_support = is_o_supported(info, wmes, goal.id, match)
         inst = Instantiation(name, match, goal, wmes, o_support)
         self._firings += 1
         info.firings += 1
@@ -686,17 +702,21 @@ class Agent:
             self._emit(f"\nFiring {name}")
         self._inst_of[match] = inst
         bindings = dict(match.bindings)  # type: ignore[attr-defined]
-        operators = tested_operators(info, wmes, goal.id) if o_support else []
-        declared_o = info.declared == "o-support"
+        operators = (
+            tested_operators(info, wmes, goal.id)
+            if o_support and info.declared != "o-support"
+            else []
+        )
+        prefs = inst.prefs
         for action in info.actions:
             try:
-                if isinstance(action, MakeAction):
+                if type(action) is MakeAction:
                     pref = self._make_preference(action, bindings, inst)
                     if pref is None:
                         continue
-                    if o_support and (declared_o or not any(pref.id is o for o in operators)):
+                    if o_support and not any(pref.id is o for o in operators):
                         pref.o_supported = True
-                    inst.prefs.append(pref)
+                    prefs.append(pref)
                 else:
                     self._call(action.call, bindings, inst)
             except SoarError as error:
@@ -734,9 +754,16 @@ class Agent:
     def _make_preference(
         self, action: MakeAction, bindings: dict[str, Symbol], inst: Instantiation
     ) -> Preference | None:
-        ident = self._value(action.id, bindings, inst)
-        attr = self._value(action.attr, bindings, inst)
-        value = self._value(action.value, bindings, inst)
+        ident = bindings.get(action.id.name)
+        if ident is None:
+            ident = self._value(action.id, bindings, inst)
+        attr = action.attr
+        attr = attr.value if type(attr) is Const else self._value(attr, bindings, inst)
+        value = action.value
+        if type(value) is Const:
+            value = value.value
+        else:
+            value = self._value(value, bindings, inst)
         referent = None
         if action.referent is not None:
             referent = self._value(action.referent, bindings, inst)
@@ -899,8 +926,9 @@ class Agent:
         return True
 
     def _collect_unlinked(self) -> None:
-        """Soar 9.6 garbage-collects identifiers no WME links to any more: their input
-        WMEs, WMEs and preferences (o-supported ones too) go at once, recursively."""
+        """Soar 9.6 drops the o-supported preferences (and input WMEs) of identifiers that
+        no WME links to any more; their i-supported WMEs wait for their instantiations to
+        retract, as in the kernel. The slots are decided again in this same phase."""
         while self._unlinked:
             ident = self._unlinked.pop()
             if ident in self._refs:
@@ -909,14 +937,8 @@ class Agent:
                 self._remove_arch(wme)
             for slot in list(self._slots.get(ident, {}).values()):
                 for pref in slot.all_preferences():
-                    slot.remove(pref)
-                wmes = list(slot.wmes.values()) + list(slot.acceptable_wmes.values())
-                slot.wmes.clear()
-                slot.acceptable_wmes.clear()
-                for wme in wmes:
-                    if wme is not None:
-                        self._remove_wme(wme)
-            self._slots.pop(ident, None)
+                    if pref.o_supported:
+                        self._remove_preference(pref)
 
     def _diff_slot(self, slot: Slot, adds: list, removes: list[WME]) -> None:
         """A non-operator slot holds every acceptable value that is not rejected."""
