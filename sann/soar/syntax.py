@@ -1,21 +1,32 @@
 """Parse Soar 9.6 rule files into the dataclasses of `sann.soar.production`.
 
+API: `parse` (a file's productions and commands, in order), `parse_partial` (what precedes
+the first error, and the error: how the kernel loads a file), `parse_file`,
+`parse_production`, and `KNOWN_RHS_FUNCTIONS`.
+
 The grammar lives in ``grammars/soar.lark`` (LALR(1), contextual lexer). This module holds
 what a grammar cannot say:
 
-- a post-lexer that makes newlines white space inside braces (commands end at a newline,
-  productions span lines);
-- a transformer, one small method per grammar rule, that normalises Soar's surface syntax
-  exactly as the kernel does: ``^a.b.c`` paths become chains through fresh variables named
+- a post-lexer that makes newlines and ``;`` white space inside braces (commands end at a
+  newline or ``;``, productions span lines);
+- an inline transformer, one small method per grammar rule, that normalises Soar's surface
+  syntax as the kernel does: ``^a.b.c`` paths become chains through fresh variables named
   like the kernel's (``<a*1>``, ``<b*1>``: the first letter of the attribute and a counter per
   letter that skips names the production already uses), a missing value or identifier test
   becomes a fresh variable, ``^a v1 v2`` one condition per value, ``-( ... )`` of several
-  conditions a conjunctive negation, several preferences on one value several actions;
+  conditions a conjunctive negation, several preferences on one value several actions, and
+  preferences other than ``+``/``-`` off ``^operator`` are dropped with a `SoarWarning`;
 - the checks the kernel makes when it loads a production: ``(state <s>)`` with no attribute
-  test, RHS actions whose identifier is not grounded, unknown RHS functions, binary
-  preferences on a non-operator attribute — plus our own refusal of ``exec`` and ``cmd``;
+  test, RHS actions whose identifier is not grounded, unbound function arguments, binary
+  preferences off ``^operator``, numbers out of range — plus our own refusal of unknown RHS
+  functions (the kernel would turn them into ``exec``), of ``exec``/``cmd`` and of Soar-RL
+  ``:template`` rules;
 - the translation of Lark's exceptions into `SoarSyntaxError` with file, line, column,
   the source line and the expected tokens in words. No Lark exception escapes `parse`.
+
+Known difference from the kernel's naming: the kernel also adds a fresh equality variable to
+an attribute or value test that has none (``^b << x y >>`` prints as ``^b { << x y >> <b*1> }``)
+which shifts its counters; we keep such tests as written.
 """
 
 from __future__ import annotations
