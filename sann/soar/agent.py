@@ -1248,12 +1248,13 @@ class Agent:
         grounds = tuple(
             self._backtrace(inst, inst.goal.level, through_o_support=True, visited=visited)
         )
-        home = self._goal_of_grounds(grounds, results)
+        match_goal_id = self._goal_of_grounds(grounds).id
         operators = [
             w.value
             for w in grounds
-            if w.id is home.id and w.attr == "operator" and not w.acceptable
+            if w.id is match_goal_id and w.attr == "operator" and not w.acceptable
         ]
+        home = self._goal_of_results(results)
         just = Instantiation(
             f"justify{self._justifications}", None, home, (), bool(operators), True
         )
@@ -1309,17 +1310,23 @@ class Agent:
                     continue
             self._schedule_retraction(just)
 
-    def _goal_of_grounds(self, grounds: tuple[WME, ...], results: list[Preference]) -> Goal:
+    def _goal_of_grounds(self, grounds: tuple[WME, ...]) -> Goal:
+        """The justification's match goal: the deepest state among its conditions."""
         best = self._top
         for wme in grounds:
             goal = self._goals.get(wme.id)
             if goal is not None and goal.level > best.level:
                 best = goal
-        for pref in results:
-            level = self._level_of(pref.id)
-            while best.level > level and best.superstate is not None:
-                best = best.superstate
         return best
+
+    def _goal_of_results(self, results: list[Preference]) -> Goal:
+        """The goal a justification lives with: the level of its highest result, so that
+        it survives the substates that made it."""
+        level = min(self._level_of(p.id) for p in results)
+        goal = self._top
+        while goal.sub is not None and goal.sub.level <= level:
+            goal = goal.sub
+        return goal
 
     def _backtrace(
         self,
