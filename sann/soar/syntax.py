@@ -767,8 +767,11 @@ def _syntax_error(
 
 
 def _end_position(text: str) -> tuple[int, int]:
-    lines = text.split("\n")
-    return len(lines), len(lines[-1]) + 1
+    """Where "unexpected end of input" points: just after the last non-blank character, so
+    the message shows the unfinished line rather than an empty one."""
+    end = len(text.rstrip())
+    line_start = text.rfind("\n", 0, end) + 1
+    return text.count("\n", 0, end) + 1, end - line_start + 1
 
 
 # Terminals that only the root lexer can produce inside a production: when the parser's

@@ -448,6 +448,7 @@ def _syntax_error(text: str) -> SoarSyntaxError:
     [
         ("sp {p (state <s> ^a b) -> (write x)}", 1, 24, ["'-->'"]),
         ("sp {p (state <s> ^a b)\n  --> (<s> ^b c)", 2, 17, ["'}'", "end of input"]),
+        ("sp {p (state <s> ^a b)\n  --> (<s> ^b c)\n\n  \n", 2, 17, ["end of input"]),
         ("sp {p (state <s> a b) --> }", 1, 18, ["'^'", "symbol 'a'"]),
         ("sp {p (state <s> ^a b) --> (s ^a b)}", 1, 31, ["'^'"]),
         ("sp {p :foo (state <s> ^a b) --> }", 1, 7, ["flag"]),
