@@ -96,7 +96,7 @@ def read_spec(path: str | Path) -> AgentSpec:
 
 def _parse_input(body: str, path: Path) -> tuple[str, Any]:
     words = body.split()
-    if len(words) == 1 and "=" in words[0]:
+    if len(words) == 1 and "=" in words[0] and not words[0].startswith("="):
         attr, raw = words[0].split("=", 1)
         return attr, _typed(raw)
     if not words or "=" in words[0]:

@@ -210,3 +210,27 @@ def test_our_engine_plans_blocks_through_io_links() -> None:
     scenes = bench.make_scenes(40, 26, seed=3)
     planner = bench.OurPlanner()
     assert [planner.solve(scene) for scene in scenes] == [scene.plan() for scene in scenes]
+
+
+def test_agent_headers_are_read(tmp_path: Path) -> None:
+    agent = tmp_path / "a.soar"
+    agent.write_text(
+        "# differential: random\n# differential: decisions 40\n"
+        "# input: item name=apple price=3 weight=0.5\n# input: disks=4\n"
+    )
+    spec = read_spec(agent)
+    assert spec.random and spec.decisions == 40
+    assert spec.inputs == (
+        ("item", (("name", "apple"), ("price", 3), ("weight", 0.5))),
+        ("disks", 4),
+    )
+
+
+@pytest.mark.parametrize(
+    "header", ["# differential: sometimes", "# input: =3", "# input: item price"]
+)
+def test_bad_agent_headers_are_refused(tmp_path: Path, header: str) -> None:
+    agent = tmp_path / "bad.soar"
+    agent.write_text(header + "\n")
+    with pytest.raises(ValueError, match="bad.soar"):
+        read_spec(agent)
