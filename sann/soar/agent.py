@@ -599,6 +599,10 @@ class Agent:
         queue.clear()
         fired: list[Instantiation] = []
         for match, info in reversed(matches):
+            if type(match) is _JustificationMatch:
+                if change_level and match.level <= change_level:
+                    queue[match] = info
+                continue
             if change_level and self._touches_level(match, info, change_level):
                 queue[match] = info
                 continue
@@ -1264,12 +1268,25 @@ class Agent:
             copy.o_supported = bool(operators) and not any(pref.id is op for op in operators)
             just.prefs.append(copy)
         self._new_justifications.append(just)
+        self._justification_matches(inst.goal, home.level)
         if not all(p.o_supported for p in just.prefs):
             for wme in grounds:
                 self._dependents.setdefault(wme, []).append(just)
             self._watch_negations(just, visited, inst.goal.level)
         if home.level > 1:
             home.insts.add(just)
+
+    def _justification_matches(self, source: Goal, result_level: int) -> None:
+        """The kernel adds a justification to its Rete for each level a result passes
+        (from the substate up to the result's level). When a result goes up two levels or
+        more, each new one matches at once, which is activity at its level (a cycle there
+        fires nothing; measured with soar_sml). Count it the same way."""
+        if source.level - result_level < 2:
+            return  # one level up: the kernel refracts the match, no new activity
+        goal: Goal | None = source.superstate
+        while goal is not None and goal.level >= result_level:
+            goal.pending_i[_JustificationMatch(result_level)] = None  # type: ignore[assignment]
+            goal = goal.superstate
 
     def _watch_negations(
         self, just: Instantiation, visited: list[Instantiation], level: int
@@ -1416,6 +1433,15 @@ class Agent:
 
     def __repr__(self) -> str:
         return f"<Agent {self.name}: {len(self._productions)} productions, {len(self._wm)} wmes>"
+
+
+class _JustificationMatch:
+    """A placeholder for the match of a new justification (see _justification_matches)."""
+
+    __slots__ = ("level",)
+
+    def __init__(self, level: int) -> None:
+        self.level = level
 
 
 def load_agent(paths: Iterable[str], **kwargs: object) -> Agent:
