@@ -685,7 +685,7 @@ class _JoinNode(_Node):
     matcher."""
 
     __slots__ = ("amem", "pos", "getter", "amem_index", "parent_index", "check", "extend",
-                 "registry")
+                 "grow", "registry")
 
     def __init__(self, rete: Rete, parent: _Node, key: object, amem: _AlphaMemory,
                  index: tuple[int, str] | None, check: Callable | None,
@@ -694,6 +694,8 @@ class _JoinNode(_Node):
         self.amem = amem
         self.check = check
         self.extend = extend
+        # 0: binds nothing, 1: binds the value (most joins), 2: anything else (extend)
+        self.grow = 0 if extend is None else 1 if extend is _EXTEND_VALUE else 2
         self.registry = rete._wme_info
         if index is None:
             self.pos = -1
@@ -717,13 +719,13 @@ class _JoinNode(_Node):
                 return
         else:
             bucket = self.amem.wmes
-        check, extend, registry = self.check, self.extend, self.registry
+        check, extend, grow, registry = self.check, self.extend, self.grow, self.registry
         tokens, index_list, children = self.tokens, self.index_list, self.children
         for wme in bucket:
             if check is not None and not check(vals, wme):
                 continue
-            tok = _Token((t, wme, vals if extend is None else extend(vals, wme), self, None,
-                          None))
+            new = vals if grow == 0 else vals + (wme.value,) if grow == 1 else extend(vals, wme)
+            tok = _Token((t, wme, new, self, None, None))
             siblings = t[4]
             if siblings is None:
                 t[4] = {tok: None}
@@ -731,8 +733,15 @@ class _JoinNode(_Node):
                 siblings[tok] = None
             registry[wme][1][tok] = None
             tokens[tok] = None
-            if index_list:
-                self._index_token(tok)
+            for pos, index in index_list:
+                key = new[pos]
+                if key.__class__ is float:
+                    key = (_FLOAT, key)
+                same = index.get(key)
+                if same is None:
+                    index[key] = {tok: None}
+                else:
+                    same[tok] = None
             for child in children:
                 child.left_activate(tok)
 
@@ -746,15 +755,16 @@ class _JoinNode(_Node):
                 return
         else:
             bucket = self.parent.tokens
-        check, extend = self.check, self.extend
+        check, extend, grow = self.check, self.extend, self.grow
         tokens, index_list, children = self.tokens, self.index_list, self.children
         built = self.registry[wme][1]
+        bound = wme.value if grow == 1 else None
         for t in bucket:
             vals = t[2]
             if check is not None and not check(vals, wme):
                 continue
-            tok = _Token((t, wme, vals if extend is None else extend(vals, wme), self, None,
-                          None))
+            new = vals if grow == 0 else vals + (bound,) if grow == 1 else extend(vals, wme)
+            tok = _Token((t, wme, new, self, None, None))
             siblings = t[4]
             if siblings is None:
                 t[4] = {tok: None}
@@ -762,22 +772,17 @@ class _JoinNode(_Node):
                 siblings[tok] = None
             built[tok] = None
             tokens[tok] = None
-            if index_list:
-                self._index_token(tok)
+            for pos, index in index_list:
+                key = new[pos]
+                if key.__class__ is float:
+                    key = (_FLOAT, key)
+                same = index.get(key)
+                if same is None:
+                    index[key] = {tok: None}
+                else:
+                    same[tok] = None
             for child in children:
                 child.left_activate(tok)
-
-    def _index_token(self, tok: _Token) -> None:
-        vals = tok[2]
-        for pos, index in self.index_list:
-            key = vals[pos]
-            if key.__class__ is float:
-                key = (_FLOAT, key)
-            bucket = index.get(key)
-            if bucket is None:
-                index[key] = {tok: None}
-            else:
-                bucket[tok] = None
 
 
 class _NegativeNode(_Node):
@@ -1074,45 +1079,62 @@ def _alpha_test(spec: tuple) -> Callable[[WME], bool]:
     return in_disjunction
 
 
-def _all_of(tests: list[Callable]) -> Callable | None:
+def _all_of(tests: list[Callable[[WME], bool]]) -> Callable[[WME], bool] | None:
     if not tests:
         return None
     if len(tests) == 1:
         return tests[0]
     frozen = tuple(tests)
-    if frozen[0].__code__.co_argcount == 1:
-        return lambda w: all(t(w) for t in frozen)
-
-    def every(vals: tuple, w: WME) -> bool:
-        for t in frozen:
-            if not t(vals, w):
-                return False
-        return True
-
-    return every
+    return lambda w: all(t(w) for t in frozen)
 
 
-def _beta_test(spec: BetaSpec) -> Callable[[tuple, WME], bool]:
-    (lk, la), op, (rk, ra) = spec
-    rel = same_symbol if op == "=" else _RELATIONS[op]
-    if lk == "w" and rk == "v":
-        get = _GET[la]
-        return lambda vals, w: rel(get(w), vals[ra])
-    if lk == "w":
-        get, get2 = _GET[la], _GET[ra]
-        return lambda vals, w: rel(get(w), get2(w))
-    if rk == "w":
-        get2 = _GET[ra]
-        return lambda vals, w: rel(vals[la], get2(w))
-    return lambda vals, w: rel(vals[la], vals[ra])
+_NUMBERS = frozenset((int, float))
+_ORDER_OPS = {"<": "<", ">": ">", "<=": "<=", ">=": ">="}
+
+
+def _compile_check(specs: list[BetaSpec]) -> Callable[[tuple, WME], bool] | None:
+    """One Python function testing every beta test of a join: the tests run in the
+    innermost loop, where a call per test would cost more than the test itself."""
+    if not specs:
+        return None
+    lines = ["def check(vals, w):"]
+    for n, ((lk, la), op, (rk, ra)) in enumerate(specs):
+        left = f"w.{la}" if lk == "w" else f"vals[{la}]"
+        right = f"w.{ra}" if rk == "w" else f"vals[{ra}]"
+        x, y = f"x{n}", f"y{n}"
+        lines.append(f"    {x} = {left}; {y} = {right}")
+        if op == "=":
+            lines.append(f"    if {x} is not {y} and not ({x}.__class__ is {y}.__class__ "
+                         f"and {x} == {y}): return False")
+        elif op == "<>":
+            lines.append(f"    if {x} is {y} or ({x}.__class__ is {y}.__class__ "
+                         f"and {x} == {y}): return False")
+        elif op == "<=>":
+            lines.append(f"    if {x}.__class__ is not {y}.__class__: return False")
+        elif op == "@":
+            lines.append("    return False")
+        elif op in _ORDER_OPS:
+            lines.append(f"    if {x}.__class__ in NUMBERS and {y}.__class__ in NUMBERS:")
+            lines.append(f"        if not ({x} {op} {y}): return False")
+            lines.append(f"    elif not RELATIONS[{op!r}]({x}, {y}): return False")
+        elif op != "!@":
+            raise AssertionError(f"unknown relation {op!r}")
+    lines.append("    return True")
+    namespace: dict[str, object] = {"NUMBERS": _NUMBERS, "RELATIONS": _RELATIONS}
+    exec("\n".join(lines), namespace)  # noqa: S102 -- generated from our own specs only
+    return namespace["check"]  # type: ignore[return-value]
+
+
+def _EXTEND_VALUE(vals: tuple, w: WME) -> tuple:  # noqa: N802 -- a marker as much as a function
+    return vals + (w.value,)
 
 
 def _extender(fields: tuple[str, ...]) -> Callable | None:
+    """How a join extends a token's values with what the WME binds."""
     if not fields:
         return None
-    if len(fields) == 1:
-        get = _GET[fields[0]]
-        return lambda vals, w: vals + (get(w),)
+    if fields == ("value",):
+        return _EXTEND_VALUE
     getters = tuple(_GET[f] for f in fields)
     return lambda vals, w: vals + tuple(g(w) for g in getters)
 
@@ -1132,7 +1154,7 @@ class _Plan:
 
 
 def _plan_condition(cond: Condition, var_pos: dict[str, int], nvals: int,
-                    deferred: list[tuple[int, str, str]]) -> _Plan:
+                    deferred: list[tuple[int, str, str]], states: set[str]) -> _Plan:
     """Compile ``cond`` given the variables bound so far (``var_pos``, updated in place for a
     positive condition).  Relational tests on variables bound only later are appended to
     ``deferred`` and placed at the join that binds them."""
@@ -1143,8 +1165,9 @@ def _plan_condition(cond: Condition, var_pos: dict[str, int], nvals: int,
     local: dict[str, Ref] = {}  # variables first bound by this condition -> their field
     field_ref: dict[str, Ref] = {}
     relational: list[tuple[str, str, str]] = []
-    if cond.goal is not None:
-        alpha.append(("state",))
+    if cond.goal is not None and not any(
+            name in var_pos and name in states for name in equality_vars(cond.id_test)):
+        alpha.append(("state",))  # (a variable already tested as a state needs no retest)
     for field, test in zip(_FIELDS, _fields(cond), strict=True):
         ref: Ref | None = None
         new_names: list[str] = []
@@ -1344,7 +1367,8 @@ class Rete:
         conditions = production.conditions
         scope = _bound_by(conditions)
         var_pos: dict[str, int] = {}
-        bottom, order = self._build_scope(conditions, self._root, var_pos, 0, scope, True)
+        bottom, order = self._build_scope(conditions, self._root, var_pos, 0, scope, True,
+                                          set())
         layout = _Layout(order, sorted((n, p) for n, p in var_pos.items() if n in scope))
         pnode = _ProductionNode(self, bottom, production, layout)
         bottom.children.append(pnode)
@@ -1467,18 +1491,20 @@ class Rete:
 
     def _build_scope(self, elements: tuple[ConditionElement, ...], parent: _Node,
                      var_pos: dict[str, int], nvals: int, scope: set[str],
-                     first_fixed: bool) -> tuple[_Node, list[int]]:
+                     first_fixed: bool, states: set[str]) -> tuple[_Node, list[int]]:
         order = _join_order(elements, var_pos, scope, first_fixed)
         deferred: list[tuple[int, str, str]] = []
         node = parent
         for index in order:
             element = elements[index]
             if isinstance(element, ConjunctiveNegation):
-                node = self._build_ncc(element, node, dict(var_pos), nvals, scope)
+                node = self._build_ncc(element, node, dict(var_pos), nvals, scope, set(states))
                 continue
-            plan = _plan_condition(element, var_pos, nvals, deferred)
+            plan = _plan_condition(element, var_pos, nvals, deferred, states)
+            if element.goal is not None and not element.negated:
+                states.update(equality_vars(element.id_test))
             amem = self._alpha_memory(plan)
-            check = _all_of([_beta_test(spec) for spec in plan.beta])
+            check = _compile_check(plan.beta)
             if element.negated:
                 key = ("neg", id(amem), plan.index, tuple(plan.beta))
                 node = self._child(node, key, lambda p, k, a=amem, pl=plan, c=check:
@@ -1506,9 +1532,10 @@ class Rete:
         return node
 
     def _build_ncc(self, ncc: ConjunctiveNegation, parent: _Node, var_pos: dict[str, int],
-                   nvals: int, scope: set[str]) -> _Node:
+                   nvals: int, scope: set[str], states: set[str]) -> _Node:
         inner_scope = scope | _bound_by(ncc.conditions)
-        bottom, _ = self._build_scope(ncc.conditions, parent, var_pos, nvals, inner_scope, False)
+        bottom, _ = self._build_scope(ncc.conditions, parent, var_pos, nvals, inner_scope, False,
+                                      states)
         key = ("ncc", id(bottom))
         node = parent.child_map.get(key)
         if node is not None:
