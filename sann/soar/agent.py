@@ -771,13 +771,15 @@ class Agent:
         referent = None
         if action.referent is not None:
             referent = self._value(action.referent, bindings, inst)
-        if not isinstance(ident, Identifier):
+        if type(ident) is not Identifier:
             self._emit(
                 f"\nError: production {inst.name} makes a preference for a non-identifier"
                 f" {format_value(ident)}; action ignored."
             )
             return None
-        ptype = preference_type(action.preference, referent)
+        ptype = action.preference
+        if referent is not None:
+            ptype = preference_type(ptype, referent)
         return Preference(ptype, ident, attr, value, referent, inst)
 
     def _retract(self, inst: Instantiation) -> None:
@@ -948,6 +950,21 @@ class Agent:
         """A non-operator slot holds every acceptable value that is not rejected."""
         prefs = slot.prefs
         acceptable = prefs.get(ACCEPTABLE)
+        wmes = slot.wmes
+        if acceptable is not None and len(prefs) == 1 and len(acceptable) == 1:
+            # Fast path: one acceptable preference and nothing else.
+            value = acceptable[0].value
+            key = value if type(value) is not float else (float, value)
+            if key in wmes:
+                if len(wmes) > 1:
+                    for other in [k for k in wmes if k != key or type(k) is not type(key)]:
+                        removes.append(wmes.pop(other))
+                return
+            for other in list(wmes):
+                removes.append(wmes.pop(other))
+            wmes[key] = None  # type: ignore[assignment]
+            adds.append((slot, value))
+            return
         wanted: dict[object, Symbol] = {}
         if acceptable:
             for pref in acceptable:
@@ -960,7 +977,6 @@ class Agent:
             for ptype in (REJECT, PROHIBIT):
                 for pref in prefs.get(ptype, ()):
                     wanted.pop(_vkey(pref.value), None)
-        wmes = slot.wmes
         for key in [k for k in wmes if k not in wanted]:
             removes.append(wmes.pop(key))
         for key, value in wanted.items():
@@ -1178,6 +1194,13 @@ class Agent:
 
     def _decision_consistent(self, goal: Goal) -> bool:
         slot = goal.op_slot
+        selected_wme = goal.selected()
+        if selected_wme is not None and len(slot.prefs) == 1:
+            # Fast path: only acceptable preferences, all for the selected operator.
+            only = slot.prefs.get(ACCEPTABLE)
+            value = selected_wme.value
+            if only and all(p.value is value for p in only):
+                return True
         impasse, candidates = dec.run_preference_semantics(slot, None, consistency=True)
         selected = goal.selected()
         if selected is not None:
