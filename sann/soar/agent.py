@@ -849,17 +849,23 @@ class Agent:
             (self._changed_context if slot.is_context else self._changed).append(slot)
 
     def _o_reject(self, reject: Preference) -> None:
+        """An o-supported reject removes every preference for that value from the slot."""
         slot = self._slot(reject.id, reject.attr, create=False)
         if slot is None:
             return
-        key = _vkey(reject.value)
-        for pref in slot.all_preferences():
-            if _vkey(pref.value) == key and (
-                not isinstance(key, Identifier) or pref.value is reject.value
-            ):
-                if self.trace_level >= 5:
-                    self._emit("\n-" + trace_preference(pref))
-                self._remove_preference(pref)
+        target = reject.value
+        key = _vkey(target)
+        doomed = [
+            pref
+            for bucket in slot.prefs.values()
+            for pref in bucket
+            if (pref.value is target or _vkey(pref.value) == key)
+            and (type(target) is not Identifier or pref.value is target)
+        ]
+        for pref in doomed:
+            if self.trace_level >= 5:
+                self._emit("\n-" + trace_preference(pref))
+            self._remove_preference(pref)
 
     # ------------------------------------------------------------- WM phase
 
