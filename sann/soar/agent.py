@@ -268,7 +268,9 @@ class Agent:
     def input_link(self):  # type: ignore[no-untyped-def]
         from .io import InputHandle
 
-        return InputHandle(self, self._input_link_id, None)
+        if self._input_handle is None:
+            self._input_handle = InputHandle(self, self._input_link_id, None)
+        return self._input_handle
 
     @property
     def output_link(self):  # type: ignore[no-untyped-def]
@@ -304,6 +306,8 @@ class Agent:
     def _build(self) -> None:
         """Fresh working memory and counters, then the top state as the kernel makes it."""
         self._ids = IdentifierFactory()
+        self._epoch = getattr(self, "_epoch", 0) + 1
+        self._input_handle = None
         self._timetag = 0
         self._wm: dict[int, WME] = {}
         self._slots: dict[Identifier, dict[object, Slot]] = {}

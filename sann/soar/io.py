@@ -34,6 +34,8 @@ class WMEHandle:
         if self.removed:
             return
         self.removed = True
+        if self.wme is not None and self.wme.timetag not in self._agent._wm:
+            return  # gone already (init() cleared working memory)
         self._agent._queue_input(("remove", self))
 
     def __repr__(self) -> str:
@@ -49,6 +51,7 @@ class InputHandle:
         self._link = link
         self._children: list[WMEHandle] = []
         self._sub: dict[int, InputHandle] = {}
+        self._epoch = agent._epoch
 
     @property
     def id(self) -> str:
@@ -76,6 +79,7 @@ class InputHandle:
 
     def update(self, attr: str, value: object) -> WMEHandle | InputHandle:
         """Replace every value of ``attr`` made through this handle by ``value``."""
+        self._check_live()
         for child in list(self._children):
             if child.attr == attr and not child.removed:
                 if (
@@ -91,6 +95,8 @@ class InputHandle:
         """Remove this identifier's link and everything made under it."""
         if self._link is None:
             raise SoarRuntimeError("the input-link itself cannot be removed")
+        if self._epoch != self._agent._epoch:
+            return  # init() already cleared working memory
         self._link.remove()
         self._clear()
 
@@ -112,6 +118,10 @@ class InputHandle:
         return handle
 
     def _check_live(self) -> None:
+        if self._epoch != self._agent._epoch:
+            raise SoarRuntimeError(
+                f"input handle {self.id} dates from before init(); use agent.input_link again"
+            )
         if self._link is not None and self._link.removed:
             raise SoarRuntimeError(f"input identifier {self.id} was removed")
 

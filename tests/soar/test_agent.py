@@ -414,3 +414,35 @@ def test_trace_level_is_checked() -> None:
     agent, _ = make()
     with pytest.raises(SoarRuntimeError):
         agent.trace(6)
+
+
+def test_input_link_handle_is_shared_and_stale_after_init() -> None:
+    agent, _ = make()
+    agent.input_link.add("x", 1)
+    agent.input_link.update("x", 2)
+    agent.run(1)
+    assert values(agent, "I2", "x") == [2]
+    block = agent.input_link.add("block")
+    agent.init()
+    block.remove()  # harmless: working memory was cleared
+    with pytest.raises(SoarRuntimeError, match="before init"):
+        block.add("id", 1)
+    agent.input_link.add("y", 3)
+    agent.run(1)
+    assert values(agent, "I2", "y") == [3] and values(agent, "I2", "x") == []
+
+
+def test_results_retract_when_negated_superstate_test_fails() -> None:
+    rules = """
+    sp {top*elab (state <s> ^superstate nil) --> (<s> ^counter 0)}
+    sp {sub (state <s> ^impasse no-change ^attribute state ^superstate <ss>)
+            (<ss> ^counter <c> -^done)
+       --> (<ss> ^operator <o> + =) (<o> ^name from-sub)}
+    sp {apply (state <s> ^operator <o>) (<o> ^name from-sub) --> (<s> ^done yes)}
+    """
+    agent, _ = make(rules)
+    agent.run(2)
+    assert agent.operator_sequence == ["from-sub"]
+    agent.run(1)
+    # ^done appeared: the justification of the proposal (made in the substate) retracts.
+    assert not any(w.attr == "operator" for w in agent.wmes() if w.id.name == "S1")
