@@ -13,8 +13,10 @@ Matching follows the real Soar 9.6 kernel (checked with ``soar_sml``):
 
 - constants and variables compare as Soar symbols: ``1``, ``1.0`` and ``|1|`` are three
   different symbols (equality requires the same Python type);
-- ``< > <= >=`` use Soar's total order: identifiers (by letter, then number) before numbers
-  (compared numerically, ints with floats) before strings (compared as strings);
+- ``< > <= >=`` between two variables use Soar's total order: identifiers (by letter, then
+  number) before numbers (compared numerically, ints with floats) before strings (compared
+  as strings); against a constant, values of another kind pass ``<``/``<=`` and fail
+  ``>``/``>=`` (the kernel's constant tests do that: both ``abc < 5`` and ``5 < abc``);
 - ``<>`` is symbol inequality, ``<=>`` "same type", ``@`` never holds and ``!@`` always holds
   (there are no long-term identifiers here).
 """
@@ -80,6 +82,19 @@ def _relation(op: str) -> Callable[[Symbol, Symbol], bool]:
     return _RELATIONS[op]
 
 
+def _const_order(mixed: bool, holds: Callable[[Symbol, Symbol], bool]
+                 ) -> Callable[[Symbol, Symbol], bool]:
+    """An ordering test against a constant as the kernel runs it: numbers with numbers,
+    strings with strings, and otherwise ``mixed`` whatever the values."""
+
+    def test(value: Symbol, constant: Symbol) -> bool:
+        if _rank(value) != _rank(constant):
+            return mixed
+        return holds(value, constant)
+
+    return test
+
+
 _RELATIONS: dict[str, Callable[[Symbol, Symbol], bool]] = {
     "<>": lambda a, b: not (a.__class__ is b.__class__ and a == b),
     "<": symbol_order_less,
@@ -89,6 +104,18 @@ _RELATIONS: dict[str, Callable[[Symbol, Symbol], bool]] = {
     "<=>": lambda a, b: a.__class__ is b.__class__,
     "@": lambda a, b: False,
     "!@": lambda a, b: True,
+}
+
+#: Relational tests against a constant (``^size > 3``).  The 9.6 kernel orders those
+#: differently from tests against a variable: when the value and the constant are of
+#: different kinds (number, string, identifier), ``<`` and ``<=`` hold and ``>`` and ``>=``
+#: do not — so both ``abc < 5`` and ``5 < abc`` hold, as soar_sml shows.
+_CONST_RELATIONS: dict[str, Callable[[Symbol, Symbol], bool]] = {
+    **_RELATIONS,
+    "<": _const_order(True, symbol_order_less),
+    "<=": _const_order(True, _less_equal),
+    ">": _const_order(False, lambda a, b: symbol_order_less(b, a)),
+    ">=": _const_order(False, lambda a, b: _less_equal(b, a)),
 }
 
 
@@ -242,7 +269,7 @@ def _check_scope(
         grown = False
         for cond in positives:
             if linked.intersection(equality_vars(cond.id_test)):
-                new = set(equality_vars(cond.attr_test) + equality_vars(cond.value_test))
+                new = set(equality_vars(cond.value_test))  # the kernel links through values
                 if not new <= linked:
                     linked |= new
                     grown = True
@@ -333,7 +360,7 @@ def _test_holds(test: Test, value: Symbol, bindings: dict[str, Symbol], final: b
     if isinstance(test, Relational):
         operand = test.operand
         if isinstance(operand, Const):
-            return _RELATIONS[test.op](value, operand.value)
+            return _CONST_RELATIONS[test.op](value, operand.value)
         if operand.name not in bindings:
             return not final
         return _RELATIONS[test.op](value, bindings[operand.name])
@@ -1068,7 +1095,7 @@ def _alpha_test(spec: tuple) -> Callable[[WME], bool]:
         const = spec[2][1]
         return lambda w: same_symbol(get(w), const)
     if kind == "rel":
-        relation, const = _RELATIONS[spec[2]], spec[3][1]
+        relation, const = _CONST_RELATIONS[spec[2]], spec[3][1]
         return lambda w: relation(get(w), const)
     allowed = frozenset(spec[2])  # disjunction of typed constants
 
