@@ -811,14 +811,20 @@ class Agent:
                     bucket.remove(inst)
 
     def _assert_preferences(self, fired: list[Instantiation]) -> None:
-        """Add new preferences to their slots in the kernel's order; o-rejects remove."""
+        """Add new preferences to their slots in the kernel's order. O-supported rejects
+        first remove the existing preferences for their value, so that a rule can remove
+        and re-add the same value in one firing (the new preference survives)."""
         justifications, self._new_justifications = self._new_justifications, []
-        for inst in [*justifications, *reversed(fired)]:
+        insts = [*justifications, *reversed(fired)]
+        for inst in insts:
+            for pref in inst.prefs:
+                if pref.o_supported and pref.type == REJECT:
+                    self._o_reject(pref)
+        for inst in insts:
             for pref in reversed(inst.prefs):
                 if self.trace_level >= 5:
                     self._emit("\n+" + trace_preference(pref))
                 if pref.o_supported and pref.type == REJECT:
-                    self._o_reject(pref)
                     continue
                 self._add_preference(pref)
 

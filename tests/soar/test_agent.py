@@ -446,3 +446,15 @@ def test_results_retract_when_negated_superstate_test_fails() -> None:
     agent.run(1)
     # ^done appeared: the justification of the proposal (made in the substate) retracts.
     assert not any(w.attr == "operator" for w in agent.wmes() if w.id.name == "S1")
+
+
+def test_remove_and_readd_same_value_in_one_firing_keeps_it() -> None:
+    rules = """
+    sp {p (state <s> ^superstate nil -^mark) --> (<s> ^operator <o> +) (<o> ^name init)}
+    sp {a (state <s> ^operator.name init) --> (<s> ^mark a)}
+    sp {t (state <s> ^mark a -^done) --> (<s> ^operator <o> +) (<o> ^name touch)}
+    sp {at (state <s> ^operator.name touch ^mark <m>) --> (<s> ^mark <m> - <m> ^done yes)}
+    """
+    agent, _ = make(rules)
+    agent.run(3)
+    assert values(agent, "S1", "mark") == ["a"]
