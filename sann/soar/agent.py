@@ -322,6 +322,7 @@ class Agent:
         self._new_justifications: list[Instantiation] = []
         self._refs: dict[Identifier, int] = {}
         self._in_wm_phase = False
+        self._context_changed: Goal | None = None
         self._neg_watch: dict[tuple, list[tuple]] = {}
         self._neg_keys: dict[Instantiation, list[tuple]] = {}
         self._dead_ids: list[Identifier] = []
@@ -854,6 +855,8 @@ class Agent:
         self._mark_changed(slot)
 
     def _mark_changed(self, slot: Slot) -> None:
+        if slot.is_context:
+            self._context_changed_at(slot.id)
         if not slot.changed:
             slot.changed = True
             (self._changed_context if slot.is_context else self._changed).append(slot)
@@ -1030,6 +1033,7 @@ class Agent:
                 self._emit(f"\nRemoving state {goal.sub.id} because of an operator removal.")
             self._remove_goal(goal.sub)
         del slot.wmes[_vkey(wme.value)]
+        self._context_changed_at(slot.id)
         self._remove_wme(selected)
 
     def _collect_garbage(self, slot: Slot) -> None:
@@ -1042,8 +1046,25 @@ class Agent:
 
     # ------------------------------------------------------------- decisions
 
+    def _context_changed_at(self, ident: Identifier) -> None:
+        """Remember the highest goal whose operator slot changed since the last decision
+        (the kernel's ``highest_goal_whose_context_changed``)."""
+        goal = self._goals.get(ident)
+        if goal is not None and (
+            self._context_changed is None
+            or not self._context_changed.alive
+            or goal.level < self._context_changed.level
+        ):
+            self._context_changed = goal
+
     def _decide_context_slots(self) -> None:
-        goal: Goal | None = self._top
+        """Decide from the highest goal whose context changed, else only the bottom goal."""
+        goal: Goal | None = self._context_changed
+        self._context_changed = None
+        if goal is None or not goal.alive:
+            goal = self._top
+            while goal.sub is not None:
+                goal = goal.sub
         while goal is not None:
             slot = goal.op_slot
             decidable = not slot.wmes and bool(slot.prefs)
@@ -1133,19 +1154,13 @@ class Agent:
             if key[0] == attr and key not in wanted:
                 del sub.items[key]
                 self._remove_arch(wme)
-        changed = False
         for key, value in wanted.items():
             if key not in sub.items:
                 sub.items[key] = self._add_arch(sub.id, attr, value)
-                changed = True
         count_attr = f"{attr}-count"
         old = sub.counts.get(count_attr)
-        if old is not None and old.value == len(values) and not changed:
-            return
-        if old is not None and old.value == len(values):
-            return
         if old is not None:
-            self._remove_arch(old)
+            self._remove_arch(old)  # the kernel renews the count at every update
         sub.counts[count_attr] = self._add_arch(sub.id, count_attr, len(values))
 
     def _remove_goal(self, goal: Goal) -> None:
@@ -1236,6 +1251,7 @@ class Agent:
         if selected is not None:
             goal.op_slot.wmes.clear()
             self._remove_wme(selected)
+        self._context_changed_at(goal.id)
         self._collect_changes()
 
     # ------------------------------------------------------------- results, GDS
