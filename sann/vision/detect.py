@@ -88,9 +88,10 @@ class DetectConfig:
     min_agreement: float = 0.6
     #: A detection this well confirmed suppresses the remaining hypotheses around it.
     sure_agreement: float = 0.85
-    #: Views with |cos(axis, line of sight)| below this also try the end-over-end twin.
+    #: Views with |cos(axis, line of sight)| below this always try the end-over-end twin
+    #: (others only when their own fit is below ``sure_agreement``).
     side_view_cos: float = 0.7
-    icp_points: int = 1000
+    icp_points: int = 600
     max_detections: int = MAX_DETECTIONS
 
     def __post_init__(self) -> None:
@@ -276,8 +277,8 @@ def _refine(cands: Candidates, order: np.ndarray, depth_mm: np.ndarray, K: np.nd
     """ICP from each hypothesis (best LineMod score first); keep the ones the depth confirms.
 
     A cup seen from the side is nearly symmetric end to end (a slightly tapered cylinder), so
-    LineMod sometimes picks the reversed view and ICP, being local, cannot turn it over: for
-    side views the end-over-end twin is refined too and the better-verified one kept.
+    LineMod sometimes picks the reversed view and ICP, being local, cannot turn it over: the
+    end-over-end twin is refined too and the better-verified one kept.
     Hypotheses next to a cup already confirmed beyond doubt are not refined again.
     """
     model = cup_model_cloud()
@@ -304,14 +305,19 @@ def _refine(cands: Candidates, order: np.ndarray, depth_mm: np.ndarray, K: np.nd
 def _verified_icp(model: ModelCloud, pts: np.ndarray, rotation: np.ndarray,
                   position: np.ndarray, depth_mm: np.ndarray, K: np.ndarray,
                   config: DetectConfig) -> tuple[float, IcpResult] | None:
-    """The best (depth agreement, ICP result) over the hypothesis and, seen side on, its twin."""
+    """The best (depth agreement, ICP result) over the hypothesis and its end-over-end twin.
+
+    The twin is skipped only when the hypothesis is seen along its axis and already fits
+    beyond doubt.
+    """
     stride = max(1, len(pts) // config.icp_points)
     ray = position / np.linalg.norm(position)
-    starts = [rotation]
-    if abs(float(rotation[:, 2] @ ray)) < config.side_view_cos:
-        starts.append(_flipped(rotation))
+    side_view = abs(float(rotation[:, 2] @ ray)) < config.side_view_cos
     best = None
-    for rot in starts:
+    for rot in (rotation, _flipped(rotation)):
+        if rot is not rotation and not side_view and best is not None \
+                and best[0] >= config.sure_agreement:
+            break  # a clear fit seen along the axis: the twin cannot do better
         res = icp_point_to_plane(model, pts[::stride], rot, position)
         if res.n_inliers * stride < config.min_icp_inliers:
             continue

@@ -196,13 +196,22 @@ def _mesh_hash() -> str:
     return h.hexdigest()[:16]
 
 
+def _shading() -> list[float]:
+    """The renderer's albedos and light: templates must be re-made when the look changes."""
+    from sann.vision import render
+
+    parts = (render.CUP_BODY_RGB, render.CUP_LID_RGB, render.LIGHT_DIR, [render.AMBIENT],
+             [render.CUP_SEGMENTS])
+    return [round(float(v), 6) for part in parts for v in np.ravel(part)]
+
+
 def template_key(params: TemplateParams, camera: Camera | None = None) -> str:
-    """Cache key: the parameters, the mesh, the camera and the OpenCV version."""
+    """Cache key: the parameters, the mesh, the shading, the camera and the OpenCV version."""
     camera = camera or Camera()
     blob = json.dumps(
         {"params": asdict(params), "mesh": _mesh_hash(), "K": np.asarray(camera.K).tolist(),
          "size": [camera.width, camera.height], "cv2": cv2.__version__,
-         "version": CACHE_VERSION},
+         "shading": _shading(), "version": CACHE_VERSION},
         sort_keys=True,
     )
     return hashlib.sha256(blob.encode()).hexdigest()[:20]

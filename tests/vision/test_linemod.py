@@ -13,7 +13,6 @@ from sann.vision.linemod import (
     save_templates,
     template_key,
     template_views,
-    train_templates,
 )
 from sann.vision.render import render_cup
 
@@ -22,7 +21,7 @@ SMALL = TemplateParams(tilt_step_deg=30.0, distances_mm=(600.0,), n_patches=4)
 
 @pytest.fixture(scope="module")
 def small_set():
-    return train_templates(SMALL)
+    return get_templates(SMALL)
 
 
 def test_views_cover_every_axis_direction():
