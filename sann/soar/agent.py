@@ -68,6 +68,7 @@ class Agent:
         self.out = out
         self.trace_level = 0
         self.max_elaborations = 100
+        self.max_goal_depth = 100
         self.exploration = dec.Exploration()
         self.srand(seed)
         self._productions: dict[str, ProductionInfo] = {}
@@ -1123,6 +1124,14 @@ class Agent:
     def _create_substate(
         self, goal: Goal, impasse: str, attribute: str, candidates: list[Symbol], slot: Slot
     ) -> None:
+        if goal.level >= self.max_goal_depth:
+            # The kernel's guard against runaway subgoaling: say so, make the state, halt.
+            self._emit(
+                f"\nGoal stack depth exceeded {self.max_goal_depth} on a {impasse} impasse."
+                "\nSoar appears to be in an infinite loop.  \nContinuing to subgoal may cause"
+                " Soar to \nexceed the program stack of your system.\n"
+            )
+            self.request_halt()
         ident = self._ids.new("S", level=goal.level + 1)
         sub = self._new_goal(ident, goal)
         sub.impasse, sub.attribute = impasse, attribute

@@ -458,3 +458,12 @@ def test_remove_and_readd_same_value_in_one_firing_keeps_it() -> None:
     agent, _ = make(rules)
     agent.run(3)
     assert values(agent, "S1", "mark") == ["a"]
+
+
+def test_goal_stack_depth_guard_halts_like_the_kernel() -> None:
+    agent, out = make()
+    agent.run(120)
+    # Kernel: 100 decisions, S101 made, then "System halted."
+    assert agent.halted and agent.stats["decisions"] == 100
+    assert "Goal stack depth exceeded 100 on a no-change impasse." in out.getvalue()
+    assert agent.print("S101").startswith("(S101 ")
