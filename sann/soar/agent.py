@@ -69,6 +69,8 @@ class Agent:
         self.trace_level = 0
         self.max_elaborations = 100
         self.max_goal_depth = 100
+        #: RHS errors met while running (each also printed), newest last.
+        self.errors: list[str] = []
         self.exploration = dec.Exploration()
         self.srand(seed)
         self._productions: dict[str, ProductionInfo] = {}
@@ -730,7 +732,10 @@ class Agent:
                 else:
                     self._call(action.call, bindings, inst)
             except SoarError as error:
-                raise SoarRuntimeError(f"production {name}: {error}") from error
+                # Like the kernel: report, drop this action, go on with the others.
+                message = f"Error: production {name}: {error}"
+                self.errors.append(message)
+                self._emit("\n" + message + "\n")
         if goal.level > 1:
             goal.insts.add(inst)
             self._handle_substate_preferences(inst)

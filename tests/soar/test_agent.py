@@ -404,10 +404,14 @@ def test_unlinked_structure_is_garbage_collected() -> None:
     assert not any(w.attr in ("part", "size") for w in agent.wmes())
 
 
-def test_rhs_error_names_the_production() -> None:
-    agent, _ = make("sp {bad (state <s> ^superstate nil) --> (<s> ^x (/ 1 0))}")
-    with pytest.raises(SoarRuntimeError, match="bad"):
-        agent.run(1)
+def test_rhs_error_names_the_production_and_the_run_goes_on() -> None:
+    # Kernel: "Error: attempt to divide ('/') by zero.", the action is dropped, the rest
+    # of the rule and the run go on.
+    agent, out = make("sp {bad (state <s> ^superstate nil) --> (<s> ^x (/ 1 0) ^y 2)}")
+    agent.run(1)
+    assert "production bad" in out.getvalue() and "divide by zero" in out.getvalue()
+    assert agent.errors and "bad" in agent.errors[0]
+    assert values(agent, "S1", "y") == [2] and values(agent, "S1", "x") == []
 
 
 def test_trace_level_is_checked() -> None:
