@@ -325,6 +325,7 @@ class Agent:
         self._new_justifications: list[Instantiation] = []
         self._refs: dict[Identifier, int] = {}
         self._in_wm_phase = False
+        self._phase_timetag = 0
         self._context_changed: Goal | None = None
         self._neg_watch: dict[tuple, list[tuple]] = {}
         self._neg_keys: dict[Instantiation, list[tuple]] = {}
@@ -901,6 +902,7 @@ class Agent:
             self._slots.pop(self._dead_ids.pop(), None)
 
     def _working_memory_changes(self) -> None:
+        self._phase_timetag = self._timetag
         while self._changed or self._changed_context:
             changed, self._changed = self._changed, []
             adds: list[tuple[Slot, Symbol]] = []
@@ -970,6 +972,12 @@ class Agent:
                 for pref in slot.all_preferences():
                     if pref.o_supported:
                         self._remove_preference(pref)
+                # WMEs added in this very phase are dropped too (measured on the kernel);
+                # older i-supported ones wait for their instantiations to retract.
+                for key, wme in list(slot.wmes.items()):
+                    if wme is not None and wme.timetag > self._phase_timetag:
+                        del slot.wmes[key]
+                        self._remove_wme(wme)
 
     def _diff_slot(self, slot: Slot, adds: list, removes: list[WME]) -> None:
         """A non-operator slot holds every acceptable value that is not rejected."""
