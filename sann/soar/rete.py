@@ -712,7 +712,7 @@ class _JoinNode(_Node):
     matcher."""
 
     __slots__ = ("amem", "pos", "getter", "amem_index", "parent_index", "check", "extend",
-                 "grow", "registry")
+                 "grow", "registry", "left")
 
     def __init__(self, rete: Rete, parent: _Node, key: object, amem: _AlphaMemory,
                  index: tuple[int, str] | None, check: Callable | None,
@@ -734,20 +734,21 @@ class _JoinNode(_Node):
             self.getter = _GET[field]
             self.amem_index = amem.index(field)
             self.parent_index = parent.index(self.pos)
+        # Everything a left activation reads, in one tuple: one attribute load instead of ten.
+        self.left = (self.pos, self.amem_index if index is not None else amem.wmes, check,
+                     extend, self.grow, self.registry, self.tokens, self.index_list,
+                     self.children)
 
     def left_activate(self, t: _Token) -> None:
         vals = t[2]
-        if self.pos >= 0:
-            key = vals[self.pos]
+        pos, bucket, check, extend, grow, registry, tokens, index_list, children = self.left
+        if pos >= 0:
+            key = vals[pos]
             if key.__class__ is float:
                 key = (_FLOAT, key)
-            bucket = self.amem_index.get(key)
+            bucket = bucket.get(key)
             if bucket is None:
                 return
-        else:
-            bucket = self.amem.wmes
-        check, extend, grow, registry = self.check, self.extend, self.grow, self.registry
-        tokens, index_list, children = self.tokens, self.index_list, self.children
         for wme in bucket:
             if check is not None and not check(vals, wme):
                 continue
@@ -1081,38 +1082,36 @@ def _mentioned(element: ConditionElement) -> set[str]:
     return names
 
 
-def _alpha_test(spec: tuple) -> Callable[[WME], bool]:
-    kind = spec[0]
-    if kind == "state":
-        return lambda w: w.id.level is not None
-    if kind == "never":
-        return lambda w: False
-    get = _GET[spec[1]]
-    if kind == "type":
-        cls = {"int": int, "float": float}[spec[2]]
-        return lambda w: get(w).__class__ is cls
-    if kind == "eq":
-        const = spec[2][1]
-        return lambda w: same_symbol(get(w), const)
-    if kind == "rel":
-        relation, const = _CONST_RELATIONS[spec[2]], spec[3][1]
-        return lambda w: relation(get(w), const)
-    allowed = frozenset(spec[2])  # disjunction of typed constants
-
-    def in_disjunction(w: WME) -> bool:
-        value = get(w)
-        return (value.__class__.__name__, value) in allowed
-
-    return in_disjunction
-
-
-def _all_of(tests: list[Callable[[WME], bool]]) -> Callable[[WME], bool] | None:
-    if not tests:
+def _compile_alpha(specs: list[tuple]) -> Callable[[WME], bool] | None:
+    """One generated function for a condition's constant tests (as for the join tests)."""
+    if not specs:
         return None
-    if len(tests) == 1:
-        return tests[0]
-    frozen = tuple(tests)
-    return lambda w: all(t(w) for t in frozen)
+    lines = ["def accept(w):"]
+    namespace: dict[str, object] = {"NUMBERS": _NUMBERS, "CONST": _CONST_RELATIONS}
+    for n, spec in enumerate(specs):
+        kind = spec[0]
+        if kind == "state":
+            lines.append("    if w.id.level is None: return False")
+            continue
+        if kind == "never":
+            lines.append("    return False")
+            continue
+        lines.append(f"    x = w.{spec[1]}")
+        if kind == "type":
+            lines.append(f"    if x.__class__ is not {spec[2]}: return False")
+        elif kind == "eq":
+            namespace[f"c{n}"] = spec[2][1]
+            lines.append(f"    if not (x.__class__ is c{n}.__class__ and x == c{n}): return False")
+        elif kind == "rel":
+            namespace[f"c{n}"] = spec[3][1]
+            namespace[f"r{n}"] = _CONST_RELATIONS[spec[2]]
+            lines.append(f"    if not r{n}(x, c{n}): return False")
+        else:  # disjunction of typed constants
+            namespace[f"d{n}"] = frozenset(spec[2])
+            lines.append(f"    if (x.__class__.__name__, x) not in d{n}: return False")
+    lines.append("    return True")
+    exec("\n".join(lines), namespace)  # noqa: S102 -- generated from our own specs only
+    return namespace["accept"]  # type: ignore[return-value]
 
 
 _NUMBERS = frozenset((int, float))
@@ -1481,7 +1480,7 @@ class Rete:
         if amem is not None:
             return amem
         amem = _AlphaMemory(plan.alpha_key, plan.lookup,
-                            _all_of([_alpha_test(spec) for spec in plan.alpha_tests]))
+                            _compile_alpha(plan.alpha_tests))
         self._amems[plan.alpha_key] = amem
         self._alpha_index.setdefault(plan.lookup, []).append(amem)
         self._alpha_cache.clear()
