@@ -1642,3 +1642,59 @@ class Rete:
             if children:
                 tok[4] = None
                 stack.extend(children)
+
+
+# ---------------------------------------------------------------------------------------------
+# Benchmark helper
+# ---------------------------------------------------------------------------------------------
+
+
+def measure_wme_cost(wm_size: int, trials: int = 2000, seed: int = 0) -> tuple[float, float]:
+    """Median seconds to add one WME to, and remove it from, a Rete holding ``wm_size`` WMEs.
+
+    The Rete holds three productions that join over every item of a pile (so its memories
+    are indexed and large) and one that matches each added WME; the WME added is one more
+    ``(P ^extra k)``.  For benchmarks/engine.py: the cost should not grow with ``wm_size``.
+    """
+    import random
+    import statistics
+    import time
+
+    from sann.soar.syntax import parse_production
+
+    rng = random.Random(seed)
+    rete = Rete()
+    for text in (
+        "sp {items (state <s> ^pile <p>) (<p> ^item <i>) (<i> ^value < 0) --> (write x)}",
+        "sp {bare (state <s> ^pile <p>) (<p> ^item <i>) -(<i> ^value <v>) --> (write x)}",
+        "sp {pairs (state <s> ^pile <p>) (<p> ^item <i>) (<i> ^value <v>) (<p> ^extra <v>)"
+        " --> (write x)}",
+        "sp {extra (state <s> ^pile <p>) (<p> ^extra <x>) --> (write x)}",
+    ):
+        rete.add_production(parse_production(text))
+    state, pile = Identifier("S", 1, level=1), Identifier("P", 1)
+    timetag = 0
+
+    def wme(ident: Identifier, attr: str, value: Symbol) -> WME:
+        nonlocal timetag
+        timetag += 1
+        return WME(ident, attr, value, timetag)
+
+    rete.add_wme(wme(state, "pile", pile))
+    for k in range(max(0, wm_size - 1) // 2):
+        item = Identifier("I", k + 1)
+        rete.add_wme(wme(pile, "item", item))
+        rete.add_wme(wme(item, "value", rng.randrange(1, 1_000_000)))
+    rete.take_changes()
+    adds, removes = [], []
+    clock = time.perf_counter
+    for k in range(trials):
+        extra = wme(pile, "extra", -k - 1)
+        start = clock()
+        rete.add_wme(extra)
+        middle = clock()
+        rete.remove_wme(extra)
+        adds.append(middle - start)
+        removes.append(clock() - middle)
+        rete.take_changes()
+    return statistics.median(adds), statistics.median(removes)
