@@ -623,47 +623,116 @@ def _plan_text(seqs: list) -> str:
     return " ".join(f"{s.pair}:{s.t_o}:{s.order}" for s in seqs)
 
 
-def _build_split(kind: str, mode: str, split: str, n_samples: int, first_image: int,
-                 seed: int, params: BlockWorldParams, planner, bar) -> tuple[dict, int]:
+def _scene_jobs(kind: str, mode: str, split: str, n_samples: int, seed: int,
+                params: BlockWorldParams) -> list[tuple[int, int | None]]:
+    """(scene index, block-count cap) of every scene of a split. D1 draws scenes until the
+    samples are reached; the last scene is cut to the samples still missing."""
+    if kind == "D2":
+        return [(index, None) for index in range(n_samples)]
+    jobs: list[tuple[int, int | None]] = []
+    count = 0
+    while count < n_samples:
+        index = len(jobs)
+        n = int(_scene_rng(kind, mode, split, index, seed).integers(params.min_blocks,
+                                                                      params.max_blocks + 1))
+        cap = n_samples - count
+        jobs.append((index, cap))
+        count += min(n, cap)
+    return jobs
+
+
+def _scene_samples(kind: str, mode: str, split: str, index: int, cap: int | None,
+                   first_image: int, seed: int, params: BlockWorldParams, planner) -> tuple:
+    """The samples of one scene: (X rows, logical, labels, image ids, plan texts)."""
     from sann.fusion import logical_item
 
-    X, L, Y, IMG, PLANS = [], [], [], [], []
-    count = index = 0
-    while count < n_samples:
-        cap = n_samples - count if kind == "D1" else None
-        scene, rng = _dataset_scene(kind, mode, split, index, seed, params, cap)
-        obs = observe_scene(scene, rng, params)
-        image = first_image + index
-        if kind == "D1":
-            plans = planner.plan(obs.features)
-            rows = np.column_stack([obs.features, np.full(scene.n, image)])
-            slots = range(scene.n)
-        else:
-            slot = _choose_target(obs.labels, rng)
-            plans = planner.plan(obs.features, [int(scene.ids[slot])])
-            padded = np.zeros((MAX_BLOCKS, len(FEATURE_NAMES)))
-            padded[scene.ids - 1] = obs.features
-            rows = np.append(padded.ravel(), scene.ids[slot])[None, :]
-            slots = [slot]
-        for r, slot in zip(rows, slots, strict=True):
-            seqs = plans[int(scene.ids[slot])]
-            X.append(r)
-            L.append(logical_item(s.t_o for s in seqs))
-            Y.append(int(obs.labels[slot]))
-            IMG.append(image)
-            PLANS.append(_plan_text(seqs))
-        count += len(slots)
-        index += 1
-        if bar is not None:
-            bar.update(len(slots))
-    arrays = {
-        f"X_{split}": np.asarray(X, dtype=np.float32),
-        f"logical_{split}": np.asarray(L, dtype=np.float32),
-        f"y_{split}": np.asarray(Y, dtype=np.int64),
-        f"image_{split}": np.asarray(IMG, dtype=np.int64),
-        f"plans_{split}": np.asarray(PLANS, dtype=str),
+    scene, rng = _dataset_scene(kind, mode, split, index, seed, params, cap)
+    obs = observe_scene(scene, rng, params)
+    image = first_image + index
+    if kind == "D1":
+        plans = planner.plan(obs.features)
+        rows = np.column_stack([obs.features, np.full(scene.n, image)])
+        slots = list(range(scene.n))
+    else:
+        slot = _choose_target(obs.labels, rng)
+        plans = planner.plan(obs.features, [int(scene.ids[slot])])
+        padded = np.zeros((MAX_BLOCKS, len(FEATURE_NAMES)))
+        padded[scene.ids - 1] = obs.features
+        rows = np.append(padded.ravel(), scene.ids[slot])[None, :]
+        slots = [slot]
+    seqs = [plans[int(scene.ids[slot])] for slot in slots]
+    return (rows, [logical_item(s.t_o for s in q) for q in seqs],
+            [int(obs.labels[slot]) for slot in slots], [image] * len(slots),
+            [_plan_text(q) for q in seqs])
+
+
+_WORKER: dict = {}
+
+
+def _worker_init(config) -> None:
+    from sann.tasks.planning import Planner
+
+    _WORKER["planner"] = Planner(config)
+
+
+def _worker_chunk(args: tuple) -> list[tuple]:
+    kind, mode, split, jobs, first_image, seed, params = args
+    return [_scene_samples(kind, mode, split, index, cap, first_image, seed, params,
+                           _WORKER["planner"]) for index, cap in jobs]
+
+
+def _collect(split: str, parts: list[tuple]) -> dict[str, np.ndarray]:
+    rows, logical, labels, images, plans = ([], [], [], [], [])
+    for r, lg, lb, im, pl in parts:
+        rows.append(r)
+        logical += lg
+        labels += lb
+        images += im
+        plans += pl
+    return {
+        f"X_{split}": np.concatenate(rows).astype(np.float32),
+        f"logical_{split}": np.asarray(logical, dtype=np.float32),
+        f"y_{split}": np.asarray(labels, dtype=np.int64),
+        f"image_{split}": np.asarray(images, dtype=np.int64),
+        f"plans_{split}": np.asarray(plans, dtype=str),
     }
-    return arrays, index
+
+
+def _run_jobs(kind: str, mode: str, split: str, jobs: list, first_image: int, seed: int,
+              params: BlockWorldParams, config, workers: int, bar) -> list[tuple]:
+    """Plan the scenes of ``jobs`` in this process or in a pool; results in scene order."""
+    parts: list[tuple] = []
+    if workers == 1:
+        from sann.tasks.planning import Planner
+
+        with Planner(config) as planner:
+            for index, cap in jobs:
+                part = _scene_samples(kind, mode, split, index, cap, first_image, seed, params,
+                                      planner)
+                parts.append(part)
+                if bar is not None:
+                    bar.update(len(part[2]))
+        return parts
+    import multiprocessing as mp
+
+    size = max(1, min(25, len(jobs) // (4 * workers)))
+    chunks = [(kind, mode, split, jobs[i:i + size], first_image, seed, params)
+              for i in range(0, len(jobs), size)]
+    ctx = mp.get_context("fork")
+    with ctx.Pool(workers, initializer=_worker_init, initargs=(config,)) as pool:
+        for chunk in pool.imap(_worker_chunk, chunks):
+            parts += chunk
+            if bar is not None:
+                bar.update(sum(len(p[2]) for p in chunk))
+    return parts
+
+
+def _check_workers(workers: object) -> int:
+    if workers is None:
+        return max(1, os.cpu_count() or 1)
+    if isinstance(workers, bool) or not isinstance(workers, int | np.integer) or workers < 1:
+        raise ValueError(f"workers must be a positive integer or None, got {workers!r}")
+    return int(workers)
 
 
 def _check_count(value: object, name: str) -> int:
@@ -685,13 +754,16 @@ def make_dataset(
     cap: int | None = None,
     horizon: int | None = None,
     use_cache: bool = True,
+    workers: int | None = 1,
 ) -> BlockDataset:
     """Build (or load from the cache) dataset ``kind`` (D1/D2) of ``mode`` (C1/C2/C3).
 
     Every scene is planned by ``rules`` in ``engine``; the fusion column is eq. 2 over the
     target's sequences. The cache key covers every argument except ``engine``, ``progress``
     and ``use_cache`` (the engines give identical plans: tests/tasks/test_planning.py checks
-    it), plus the rule file's sha256 and ``DATASET_VERSION``.
+    it), plus the rule file's sha256 and ``DATASET_VERSION``. ``workers`` processes plan the
+    scenes (None: one per CPU core); every scene has its own seed, so the arrays do not depend
+    on it. ``cap``/``horizon`` default to the planner's (8 sequences, T_o <= 8).
     """
     from sann import cache
     from sann.tasks.planning import DEFAULT_CAP, DEFAULT_HORIZON, DEFAULT_RULES, PlannerConfig
@@ -715,8 +787,11 @@ def make_dataset(
         "horizon": config.horizon, "version": DATASET_VERSION,
     }
 
+    n_workers = _check_workers(workers)
+
     def build() -> dict[str, np.ndarray]:
-        return _build_arrays(kind, mode, n_train, n_test, int(seed), params, config, progress)
+        return _build_arrays(kind, mode, n_train, n_test, int(seed), params, config, progress,
+                             n_workers)
 
     t0 = time.perf_counter()
     arrays, hit = cache.get_or_build(f"blocks-{kind}-{mode}", description, build,
@@ -729,25 +804,26 @@ def make_dataset(
 
 
 def _build_arrays(kind: str, mode: str, n_train: int, n_test: int, seed: int,
-                  params: BlockWorldParams, config, progress: bool) -> dict[str, np.ndarray]:
-    from sann.tasks.planning import Planner
-
+                  params: BlockWorldParams, config, progress: bool, workers: int
+                  ) -> dict[str, np.ndarray]:
     bar = None
     if progress:
         from tqdm.auto import tqdm
 
         bar = tqdm(total=n_train + n_test, desc=f"{kind}-{mode}", unit="sample")
     t0 = time.perf_counter()
+    train_jobs = _scene_jobs(kind, mode, "train", n_train, seed, params)
+    test_jobs = _scene_jobs(kind, mode, "test", n_test, seed, params)
     try:
-        with Planner(config) as planner:
-            train, n_scenes = _build_split(kind, mode, "train", n_train, 0, seed, params,
-                                           planner, bar)
-            test, n_test_scenes = _build_split(kind, mode, "test", n_test, n_scenes, seed,
-                                               params, planner, bar)
+        train = _run_jobs(kind, mode, "train", train_jobs, 0, seed, params, config, workers,
+                          bar)
+        test = _run_jobs(kind, mode, "test", test_jobs, len(train_jobs), seed, params, config,
+                         workers, bar)
     finally:
         if bar is not None:
             bar.close()
-    meta = {"train_scenes": n_scenes, "test_scenes": n_test_scenes, "engine": config.engine,
-            "build_seconds": time.perf_counter() - t0, "train_samples": n_train,
-            "test_samples": n_test}
-    return {**train, **test, "meta": np.array(json.dumps(meta))}
+    meta = {"train_scenes": len(train_jobs), "test_scenes": len(test_jobs),
+            "engine": config.engine, "build_seconds": time.perf_counter() - t0,
+            "train_samples": n_train, "test_samples": n_test, "workers": workers}
+    return {**_collect("train", train), **_collect("test", test),
+            "meta": np.array(json.dumps(meta))}

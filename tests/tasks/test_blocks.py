@@ -261,6 +261,8 @@ def test_dataset_determinism_and_cache(tmp_cache) -> None:
         assert np.array_equal(getattr(a, name), getattr(b, name))
         assert np.array_equal(getattr(a, name), getattr(c, name))
     assert a.plans_test.tolist() == c.plans_test.tolist()
+    d = make_dataset("D1", "C1", n_train=50, n_test=20, seed=7, use_cache=False, workers=2)
+    assert np.array_equal(a.X_train, d.X_train) and np.array_equal(a.logical_test, d.logical_test)
     other = make_dataset("D1", "C1", n_train=50, n_test=20, seed=8)
     assert not np.array_equal(a.X_train, other.X_train)
 
@@ -282,4 +284,6 @@ def test_dataset_bad_parameters(tmp_cache) -> None:
         make_dataset("D1", "C1", params=BlockWorldParams(sensor_noise=-1.0))
     with pytest.raises(ValueError, match="engine"):
         make_dataset("D1", "C1", engine="clips")
+    with pytest.raises(ValueError, match="workers"):
+        make_dataset("D1", "C1", workers=0)
     assert not list(tmp_cache.iterdir())

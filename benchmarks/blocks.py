@@ -1,0 +1,103 @@
+"""Block-task benchmark, dataset half: build D1-C3 (12,000 samples, planning included).
+
+Usage::
+
+    .venv/bin/python benchmarks/blocks.py [--mode C3] [--n-train 10000] [--n-test 2000]
+                                          [--engines sann,soar_sml] [--seed 0]
+
+In one process it times, on the same seeds and without the cache:
+
+- the anchor: generating and observing the scenes alone (no planning), the dataset's
+  geometry cost;
+- ``make_dataset("D1", mode)`` with each engine (rules/blocks.soar planning every block);
+
+and prints seconds, samples per second and the ratio to the anchor. The target for D1-C3
+with our engine is <= 60 s on this 2-core machine, goal 30 s. Both engines must produce the
+same arrays (checked here too). The training half (the nets) lives in functions added below
+by the networks work; keep the two halves in separate functions.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from sann.tasks.blocks import (
+    BlockWorldParams,
+    _dataset_scene,
+    make_dataset,
+    observe_scene,
+)
+
+TARGET_SECONDS = 60.0
+GOAL_SECONDS = 30.0
+
+
+def time_scene_generation(mode: str, n_samples: int, seed: int, params: BlockWorldParams
+                          ) -> tuple[float, int]:
+    """Seconds to generate and observe the scenes of a D1 split (no planning); scene count."""
+    t0 = time.perf_counter()
+    count = index = 0
+    while count < n_samples:
+        scene, rng = _dataset_scene("D1", mode, "train", index, seed, params,
+                                    n_samples - count)
+        observe_scene(scene, rng, params)
+        count += scene.n
+        index += 1
+    return time.perf_counter() - t0, index
+
+
+def time_dataset(engine: str, mode: str, n_train: int, n_test: int, seed: int):
+    """Build D1 without the cache; returns (seconds, dataset)."""
+    t0 = time.perf_counter()
+    data = make_dataset("D1", mode, n_train=n_train, n_test=n_test, seed=seed, engine=engine,
+                        use_cache=False)
+    return time.perf_counter() - t0, data
+
+
+def dataset_benchmark(mode: str, n_train: int, n_test: int, seed: int,
+                      engines: list[str]) -> dict[str, float]:
+    """Print and return the dataset-building figures."""
+    params = BlockWorldParams()
+    n = n_train + n_test
+    anchor, scenes = time_scene_generation(mode, n, seed, params)
+    print(f"D1-{mode}: {n} samples from about {scenes} scenes")
+    print(f"  anchor (scenes + features + labels, no planning): {anchor:7.2f} s")
+    results: dict[str, float] = {"anchor": anchor}
+    built = {}
+    for engine in engines:
+        seconds, data = time_dataset(engine, mode, n_train, n_test, seed)
+        results[engine] = seconds
+        built[engine] = data
+        print(f"  make_dataset with {engine:8s}: {seconds:7.2f} s  "
+              f"({n / seconds:7.0f} samples/s, {seconds / anchor:5.1f}x the anchor)")
+    if "sann" in results:
+        verdict = ("goal met" if results["sann"] <= GOAL_SECONDS else
+                   "target met" if results["sann"] <= TARGET_SECONDS else "TARGET MISSED")
+        print(f"  ours: {results['sann']:.1f} s against the {TARGET_SECONDS:.0f} s target "
+              f"(goal {GOAL_SECONDS:.0f} s): {verdict}")
+    if "sann" in built and "soar_sml" in built:
+        ratio = results["sann"] / results["soar_sml"]
+        same = all(np.array_equal(getattr(built["sann"], k), getattr(built["soar_sml"], k))
+                   for k in ("X_train", "logical_train", "y_train", "X_test", "logical_test"))
+        print(f"  ours / soar_sml: {ratio:.2f}x; identical datasets: {same}")
+        results["identical"] = float(same)
+    return results
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--mode", default="C3", choices=["C1", "C2", "C3"])
+    parser.add_argument("--n-train", type=int, default=10_000)
+    parser.add_argument("--n-test", type=int, default=2_000)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--engines", default="sann,soar_sml")
+    args = parser.parse_args(argv)
+    engines = [e for e in args.engines.split(",") if e]
+    dataset_benchmark(args.mode, args.n_train, args.n_test, args.seed, engines)
+
+
+if __name__ == "__main__":
+    main()
