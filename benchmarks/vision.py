@@ -99,6 +99,17 @@ POSE_TARGET_S = 1.5
 POSE_GOAL_S = 0.3
 
 
+def _wall_and_cpu(calls: list[Callable[[], object]]) -> tuple[float, float]:
+    """Median wall time and median process CPU time (s) of single calls."""
+    wall, cpu = [], []
+    for call in calls:
+        w0, c0 = time.perf_counter(), time.process_time()
+        call()
+        wall.append(time.perf_counter() - w0)
+        cpu.append(time.process_time() - c0)
+    return statistics.median(wall), statistics.median(cpu)
+
+
 def pose_part(piles: int, seed: int, anchor: float) -> dict[str, float]:
     """Pose estimation: speed on 10-cup piles and precision/recall on mixed piles.
 
@@ -119,18 +130,20 @@ def pose_part(piles: int, seed: int, anchor: float) -> dict[str, float]:
     config = DetectConfig(templates=params)
     busy = make_frames(max(3, piles // 3), seed + 7, cups=(10, 10))
     detect_cups(busy[0].rgb, busy[0].depth_mm, K_PRIMESENSE, config, templates)  # warm caches
-    match = statistics.median(
-        timed(lambda f=f: match_templates(templates, f.rgb, f.depth_mm, 70.0), 1)[0]
-        for f in busy)
-    full = statistics.median(
-        timed(lambda f=f: detect_cups(f.rgb, f.depth_mm, K_PRIMESENSE, config, templates),
-              1)[0] for f in busy)
+    match, match_cpu = _wall_and_cpu(
+        [lambda f=f: match_templates(templates, f.rgb, f.depth_mm, 70.0) for f in busy])
+    full, full_cpu = _wall_and_cpu(
+        [lambda f=f: detect_cups(f.rgb, f.depth_mm, K_PRIMESENSE, config, templates)
+         for f in busy])
     print(f"pose estimation: {len(templates)} templates ({params.tilt_step_deg:g} deg steps, "
           f"distances {params.distances_mm} mm), loaded/trained in {load:.1f} s")
     report("cv2.linemod match, 10-cup frame", match, anchor)
     report("detect_cups Patch-LineMod+ICP", full, anchor, POSE_TARGET_S)
     print(f"  {'detect_cups / cv2.linemod match':<38} {full / match:8.2f} x   "
           f"(goal {POSE_GOAL_S * 1e3:.0f} ms: {'met' if full <= POSE_GOAL_S else 'not met'})")
+    print(f"  {'CPU time (all threads): match, detect':<38} {match_cpu * 1e3:8.1f} ms, "
+          f"{full_cpu * 1e3:.1f} ms  (ratio {full_cpu / match_cpu:.2f}; robust to a loaded "
+          f"machine)")
     frames = make_frames(piles, seed)
     configs = {
         "linemod": DetectConfig(method="linemod", templates=params),
@@ -145,7 +158,8 @@ def pose_part(piles: int, seed: int, anchor: float) -> dict[str, float]:
               f"median error {s['median_position_error_mm']:5.2f} mm "
               f"{s['median_axis_error_deg']:5.2f} deg  {s['seconds_per_frame'] * 1e3:6.0f} ms")
     out = {"pose_templates": float(len(templates)), "pose_linemod_match": match,
-           "pose_detect": full, "pose_ratio_to_match": full / match}
+           "pose_detect": full, "pose_ratio_to_match": full / match,
+           "pose_linemod_match_cpu": match_cpu, "pose_detect_cpu": full_cpu}
     for name, s in scores.items():
         out[f"{name}_precision"] = s["precision"]
         out[f"{name}_recall"] = s["recall"]

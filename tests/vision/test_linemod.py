@@ -85,7 +85,7 @@ def test_a_rendered_view_matches_its_own_template(small_set):
 def test_cache_is_keyed_and_reused(monkeypatch, tmp_path):
     monkeypatch.setenv("SANN_CACHE", str(tmp_path))
     monkeypatch.setattr(linemod, "_MEMORY", {})
-    params = TemplateParams(tilt_step_deg=45.0, distances_mm=(650.0,), n_patches=3)
+    params = TemplateParams(tilt_step_deg=60.0, distances_mm=(650.0,), n_patches=3)
     first = get_templates(params)
     files = list(tmp_path.glob("linemod-*.npz"))
     assert [f.name for f in files] == [f"linemod-{first.key}.npz"]
@@ -93,7 +93,7 @@ def test_cache_is_keyed_and_reused(monkeypatch, tmp_path):
     monkeypatch.setattr(linemod, "train_templates", lambda *a: pytest.fail("retrained"))
     second = get_templates(params)
     assert second.key == first.key and len(second) == len(first)
-    assert template_key(params) != template_key(TemplateParams(45.0, (650.0,), 4))
+    assert template_key(params) != template_key(TemplateParams(60.0, (650.0,), 4))
 
 
 def test_bad_parameters_and_frames_are_rejected(small_set):
