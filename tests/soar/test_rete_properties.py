@@ -352,6 +352,12 @@ NEGATION_RULES = [
      ConjunctiveNegation((Condition(Var("y"), Const("b"), Var("z")),
                           Condition(Var("z"), Const("b"), Var("x")))),
      Condition(Var("y"), Const("a"), Var("n"), negated=True)),
+    # value-hashed ("reverse") joins: (<y> ^c <x>) is joined on <x> before <y> is bound
+    (Condition(Var("s"), Const("b"), Var("y")), Condition(Var("y"), Const("c"), Var("x"))),
+    (Condition(Var("x"), Const("a"), Var("z")), Condition(Var("s"), Const("b"), Var("y")),
+     Condition(Var("y"), Const("c"), Var("z"))),
+    (ConjunctiveNegation((Condition(Var("s"), Const("b"), Var("y")),
+                          Condition(Var("y"), Const("c"), Var("x")))),),
 ]
 SMALL_IDS = [STATES[0], OTHERS[0], OTHERS[1]]
 
