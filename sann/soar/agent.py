@@ -1262,6 +1262,10 @@ class Agent:
         sub = goal.sub
         if sub is not None and sub.impasse != dec.NO_CHANGE:
             return impasse == sub.impasse
+        if sub is not None:
+            # A state no-change stands only while the slot has no preference at all
+            # (measured: a lone prohibited proposal already makes it inconsistent).
+            return not slot.prefs
         return impasse == dec.NONE and not candidates
 
     def _remove_current_decision(self, goal: Goal) -> None:
