@@ -298,7 +298,7 @@ def _run(script: list[tuple]) -> None:
     assert observers[0].sync() == observers[1].sync()
 
 
-@settings(max_examples=250, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(scripts())
 def test_rete_matches_equal_brute_force(script: list[tuple]) -> None:
     _run(script)
