@@ -3,7 +3,7 @@
 Usage::
 
     .venv/bin/python benchmarks/blocks.py [--mode C3] [--n-train 10000] [--n-test 2000]
-                                          [--engines sann,soar_sml] [--seed 0]
+                                          [--engines sann,soar_sml] [--seed 0] [--workers 2]
 
 In one process it times, on the same seeds and without the cache:
 
@@ -49,26 +49,27 @@ def time_scene_generation(mode: str, n_samples: int, seed: int, params: BlockWor
     return time.perf_counter() - t0, index
 
 
-def time_dataset(engine: str, mode: str, n_train: int, n_test: int, seed: int):
+def time_dataset(engine: str, mode: str, n_train: int, n_test: int, seed: int,
+                 workers: int = 1):
     """Build D1 without the cache; returns (seconds, dataset)."""
     t0 = time.perf_counter()
     data = make_dataset("D1", mode, n_train=n_train, n_test=n_test, seed=seed, engine=engine,
-                        use_cache=False)
+                        use_cache=False, workers=workers)
     return time.perf_counter() - t0, data
 
 
 def dataset_benchmark(mode: str, n_train: int, n_test: int, seed: int,
-                      engines: list[str]) -> dict[str, float]:
+                      engines: list[str], workers: int = 1) -> dict[str, float]:
     """Print and return the dataset-building figures."""
     params = BlockWorldParams()
     n = n_train + n_test
     anchor, scenes = time_scene_generation(mode, n, seed, params)
-    print(f"D1-{mode}: {n} samples from about {scenes} scenes")
+    print(f"D1-{mode}: {n} samples from about {scenes} scenes, {workers} worker process(es)")
     print(f"  anchor (scenes + features + labels, no planning): {anchor:7.2f} s")
     results: dict[str, float] = {"anchor": anchor}
     built = {}
     for engine in engines:
-        seconds, data = time_dataset(engine, mode, n_train, n_test, seed)
+        seconds, data = time_dataset(engine, mode, n_train, n_test, seed, workers)
         results[engine] = seconds
         built[engine] = data
         print(f"  make_dataset with {engine:8s}: {seconds:7.2f} s  "
@@ -94,9 +95,11 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--n-test", type=int, default=2_000)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--engines", default="sann,soar_sml")
+    parser.add_argument("--workers", type=int, default=2,
+                        help="planning processes (the machine has 2 cores)")
     args = parser.parse_args(argv)
     engines = [e for e in args.engines.split(",") if e]
-    dataset_benchmark(args.mode, args.n_train, args.n_test, args.seed, engines)
+    dataset_benchmark(args.mode, args.n_train, args.n_test, args.seed, engines, args.workers)
 
 
 if __name__ == "__main__":

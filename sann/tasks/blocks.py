@@ -48,7 +48,7 @@ import json
 import math
 import os
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -524,7 +524,6 @@ class ObservedScene:
     scene: Scene
     features: np.ndarray  # (n, 13) float64
     labels: np.ndarray  # (n,) bool, ground truth
-    meta: dict = field(default_factory=dict)
 
 
 def observe_scene(scene: Scene, rng: np.random.Generator | int | None,
@@ -577,8 +576,13 @@ class BlockDataset:
         split, index = ("train", image) if image < n_train_scenes else (
             "test", image - n_train_scenes)
         params = BlockWorldParams(**self.meta["params"])
-        return _dataset_scene(self.kind, self.mode, split, index, int(self.meta["seed"]),
-                              params, None)[0]
+        seed = int(self.meta["seed"])
+        jobs = _scene_jobs(self.kind, self.mode, split, int(self.meta[f"{split}_samples"]),
+                           seed, params)
+        if not 0 <= index < len(jobs):
+            raise ValueError(f"image {image} is not a scene of this dataset")
+        return _dataset_scene(self.kind, self.mode, split, index, seed, params,
+                              jobs[index][1])[0]
 
     @property
     def test_scenes(self) -> list[Scene]:
@@ -797,8 +801,7 @@ def make_dataset(
     arrays, hit = cache.get_or_build(f"blocks-{kind}-{mode}", description, build,
                                      use_cache=use_cache)
     meta = {**description, **json.loads(str(arrays.pop("meta")))}
-    meta.update(cache_hit=hit, seconds=time.perf_counter() - t0, engine_used=(
-        meta["engine"] if hit else engine))
+    meta.update(cache_hit=hit, seconds=time.perf_counter() - t0)
     return BlockDataset(kind=kind, mode=mode, feature_names=feature_names_for(kind), meta=meta,
                         **arrays)
 

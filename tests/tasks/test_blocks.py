@@ -229,6 +229,8 @@ def test_d1_dataset(tmp_cache) -> None:
     assert sorted(rows[:, 6].astype(int).tolist()) == scene.ids.tolist()
     assert np.array_equal(graspable(scene)[np.searchsorted(scene.ids, rows[:, 6].astype(int))],
                           d.y_test[d.image_test == image].astype(bool))
+    last = int(d.image_train[-1])  # the last scene of a split is cut to the samples missing
+    assert d.scene(last).n == int((d.image_train == last).sum())
     assert d.meta["rules_sha256"] and d.meta["train_samples"] == 120
     assert not d.meta["cache_hit"]
 
