@@ -551,8 +551,8 @@ class Agent:
         previous, previous_type = self._active, self._active_type
         check: Goal | None = None
         if previous is not None and previous.alive:
-            if chosen.level != previous.level:
-                check = chosen if chosen.level < previous.level else previous
+            if chosen.level > previous.level:
+                check = previous  # moving down the stack: re-check the goals above
             elif firing == "PE" and previous_type != "PE":
                 check = chosen
         elif previous is not None and not previous.alive and firing == "PE":
