@@ -388,12 +388,32 @@ def render_frame(pile, camera: Camera, noise_seed: int, params: CupsDataParams):
     return clean, (add_sensor_noise(clean, noise_seed) if params.sensor_noise else clean)
 
 
+def label_detections(detections: Sequence[Detection], true_poses: np.ndarray,
+                     graspable: np.ndarray, match_mm: float = 15.0, match_deg: float = 15.0,
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """(true cup matched by each detection or -1, label 0/1 of each detection).
+
+    ``true_poses`` are cup-to-camera poses (n, 4, 4) and ``graspable`` their ground truth.
+    A detection is its matched cup's label; one that matches no true cup (a pose the gripper
+    would act on wrongly) is not graspable.
+    """
+    from sann.vision.evaluate import match_detections
+
+    graspable = np.asarray(graspable, dtype=bool).reshape(-1)
+    true_poses = np.asarray(true_poses, dtype=np.float64).reshape(-1, 4, 4)
+    if len(graspable) != len(true_poses):
+        raise ValueError(f"{len(graspable)} labels for {len(true_poses)} true cups")
+    matched = match_detections(detections, true_poses, match_mm, match_deg)
+    labels = np.array([int(j >= 0 and graspable[j]) for j in matched], dtype=np.int64)
+    return matched, labels
+
+
 def observe_pile(pile, camera: Camera, params: CupsDataParams, planner: CupPlanner,
                  noise_seed: int, methods: Sequence[str] = ("patch",)) -> PileObservation:
     """Render, detect (the first of ``methods`` makes the samples), relate, plan, label."""
     from sann.fusion import logical_item
     from sann.vision.detect import detect_cups, pose_array
-    from sann.vision.evaluate import evaluate_frame, match_detections
+    from sann.vision.evaluate import evaluate_frame
     from sann.vision.labels import label_pile
     from sann.vision.linemod import get_templates
 
@@ -419,9 +439,9 @@ def observe_pile(pile, camera: Camera, params: CupsDataParams, planner: CupPlann
     scene = CupScene.from_detections(dets, camera)
     plans = planner.plan(scene)
     seconds["plan"] = time.perf_counter() - t0
-    matched = match_detections(dets, cam_true, params.match_mm, params.match_deg)
     graspable = truth.grasp.graspable
-    labels = np.array([int(j >= 0 and graspable[j]) for j in matched], dtype=np.int64)
+    matched, labels = label_detections(dets, cam_true, graspable, params.match_mm,
+                                       params.match_deg)
     logical = np.array([logical_item(s.t_o for s in plans[i]) for i in range(len(dets))],
                        dtype=np.float32)
     return PileObservation(pose_array(dets), matched, labels, logical,
