@@ -334,10 +334,13 @@ def check_production(production: Production, links: bool = True) -> None:
     and every variable used in a relational test must be bound (by a positive condition,
     or — inside a negation — locally by the negation itself).  A variable that appears only
     inside a negation is legal: it is local to the negation.
+
+    ``links=False`` drops the two linkage rules (the kernel loads such productions with a
+    warning) but still requires a positive first condition.
     """
     conditions = production.conditions
     first = conditions[0] if conditions else None
-    if not isinstance(first, Condition) or first.negated or first.goal is None:
+    if not isinstance(first, Condition) or first.negated or (links and first.goal is None):
         raise SoarSemanticError(production.name, "the first condition must test a state: "
                                 "(state <s> ...) or (impasse <s> ...)", production.location)
     _check_scope(production, conditions, set(), set(), links)
@@ -452,7 +455,8 @@ class BruteForceMatcher:
     the Rete's property tests.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, check_links: bool = True) -> None:
+        self.check_links = check_links
         self._productions: dict[str, Production] = {}
         self._wmes: dict[WME, None] = {}
         self._current: dict[str, dict[tuple[WME | None, ...], Match]] = {}
@@ -463,7 +467,7 @@ class BruteForceMatcher:
         if production.name in self._productions:
             raise SoarSemanticError(production.name, "a production with this name exists",
                                     production.location)
-        check_production(production)
+        check_production(production, links=self.check_links)
         self._productions[production.name] = production
         self._current[production.name] = {}
         self._dirty = True
@@ -1366,8 +1370,9 @@ class Rete:
     """Doorenbos's Rete with hashed alpha and beta memories, negative and NCC nodes and
     shared prefixes.  Same interface as :class:`BruteForceMatcher`.
 
-    ``check_links=False`` accepts conditions that are not linked to a state (the real kernel
-    only warns about them); they are joined on any bound variable, or as a cross product.
+    ``check_links=False`` accepts conditions that are not linked to a state, and a first
+    condition without ``state`` (the real kernel only warns about both); they are joined on
+    any bound variable, or as a cross product.
     """
 
     def __init__(self, check_links: bool = True) -> None:

@@ -370,13 +370,17 @@ def test_accepted_productions(world: World, text: str) -> None:
     assert [p.name for p in world.m.productions()] == ["r"]
 
 
-def test_unlinked_conditions_can_be_allowed() -> None:
-    world = World(lambda: Rete(check_links=False))  # type: ignore[arg-type]
+@pytest.mark.parametrize("matcher", MATCHERS, ids=["rete", "brute"])
+def test_unlinked_conditions_can_be_allowed(matcher: type) -> None:
+    world = World(lambda: matcher(check_links=False))  # type: ignore[arg-type]
     parent, child = world.new("P"), world.new("C")
     world.add(world.s1, "child", child)
     world.add(parent, "kid", child)
+    world.add(child, "kid", "x")
     world.rule("(state <s> ^child <c>) (<p> ^kid <c>)")
+    world.rule("(<p> ^kid <k>) -(<q> ^kid <p>)", "roots")
     assert world.values("r", "p") == [parent]
+    assert world.values("roots", "p") == [parent]
 
 
 # ----- Rete structure -------------------------------------------------------------------------

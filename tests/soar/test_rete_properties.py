@@ -255,8 +255,8 @@ class _Observer:
         return set(keys)
 
 
-def _run(script: list[tuple]) -> None:
-    rete, brute = Rete(), BruteForceMatcher()
+def _run(script: list[tuple], check_links: bool = True) -> None:
+    rete, brute = Rete(check_links), BruteForceMatcher(check_links)
     observers = [_Observer(rete), _Observer(brute)]
     memory: list[WME] = []
     timetag = 0
@@ -298,7 +298,7 @@ def _run(script: list[tuple]) -> None:
     assert observers[0].sync() == observers[1].sync()
 
 
-@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(scripts())
 def test_rete_matches_equal_brute_force(script: list[tuple]) -> None:
     _run(script)
@@ -379,7 +379,28 @@ def negation_scripts(draw: st.DrawFn) -> list[tuple]:
     return steps
 
 
-@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(negation_scripts())
 def test_rete_negations_equal_brute_force(script: list[tuple]) -> None:
     _run(script)
+
+
+@st.composite
+def unlinked_scripts(draw: st.DrawFn) -> list[tuple]:
+    """Free-form rules (conditions need not be linked to a state, the first need not test a
+    state): cross products and joins on any bound variable."""
+    steps: list[tuple] = [("add", spec) for spec in draw(st.lists(wme_specs, max_size=12))]
+    for i in range(draw(st.integers(1, 3))):
+        first = draw(conditions())
+        rest = draw(st.lists(conditions() | conditions(negated=True) | nccs(), max_size=2))
+        steps.append(("production", Production(f"u{i}", (first, *rest), ())))
+    steps += draw(st.lists(st.tuples(st.just("add"), wme_specs)
+                           | st.tuples(st.just("remove"), st.integers(0, 99)),
+                           min_size=3, max_size=20))
+    return steps
+
+
+@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(unlinked_scripts())
+def test_unlinked_rules_equal_brute_force(script: list[tuple]) -> None:
+    _run(script, check_links=False)
