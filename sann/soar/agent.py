@@ -533,6 +533,10 @@ class Agent:
         Checks the goal stack's consistency like the kernel when the active level moves or
         a goal switches from i- to o-firing; an inconsistent decision ends the phase.
         """
+        if not apply and self._nil_retractions:
+            # The propose phase does the retractions of removed goals first, on their own
+            # (measured); the apply phase lets them ride along with the next cycle.
+            return None, "NIL"
         goal: Goal | None = self._top
         chosen: Goal | None = None
         firing = ""
