@@ -823,22 +823,23 @@ class Agent:
                     bucket.remove(inst)
 
     def _assert_preferences(self, fired: list[Instantiation]) -> None:
-        """Add new preferences to their slots in the kernel's order. O-supported rejects
-        first remove the existing preferences for their value, so that a rule can remove
-        and re-add the same value in one firing (the new preference survives)."""
+        """Add new preferences to their slots in the kernel's order, then let o-supported
+        rejects remove the older preferences for their values (a rule may remove and
+        re-add the same value in one firing: the new preference survives)."""
         justifications, self._new_justifications = self._new_justifications, []
-        insts = [*justifications, *reversed(fired)]
-        for inst in insts:
-            for pref in inst.prefs:
-                if pref.o_supported and pref.type == REJECT:
-                    self._o_reject(pref)
-        for inst in insts:
+        o_rejects: list[Preference] = []
+        fresh: set[int] = set()
+        for inst in [*justifications, *reversed(fired)]:
             for pref in reversed(inst.prefs):
                 if self.trace_level >= 5:
                     self._emit("\n+" + trace_preference(pref))
                 if pref.o_supported and pref.type == REJECT:
+                    o_rejects.append(pref)
                     continue
+                fresh.add(id(pref))
                 self._add_preference(pref)
+        for pref in o_rejects:
+            self._o_reject(pref, fresh)
 
     def _slot(self, ident: Identifier, attr: Symbol, create: bool = True) -> Slot | None:
         slots = self._slots.get(ident)
@@ -872,7 +873,7 @@ class Agent:
             slot.changed = True
             (self._changed_context if slot.is_context else self._changed).append(slot)
 
-    def _o_reject(self, reject: Preference) -> None:
+    def _o_reject(self, reject: Preference, fresh: set[int] = frozenset()) -> None:  # type: ignore[assignment]
         """An o-supported reject removes every preference for that value from the slot."""
         slot = self._slot(reject.id, reject.attr, create=False)
         if slot is None:
@@ -885,6 +886,7 @@ class Agent:
             for pref in bucket
             if (pref.value is target or _vkey(pref.value) == key)
             and (type(target) is not Identifier or pref.value is target)
+            and id(pref) not in fresh
         ]
         for pref in doomed:
             if self.trace_level >= 5:
