@@ -1186,10 +1186,11 @@ class Agent:
             if key not in sub.items:
                 sub.items[key] = self._add_arch(sub.id, attr, value)
         count_attr = f"{attr}-count"
-        old = sub.counts.get(count_attr)
+        old = sub.counts.pop(count_attr, None)
         if old is not None:
             self._remove_arch(old)  # the kernel renews the count at every update
-        sub.counts[count_attr] = self._add_arch(sub.id, count_attr, len(values))
+        if values:  # no ^non-numeric-count when every candidate has a numeric value
+            sub.counts[count_attr] = self._add_arch(sub.id, count_attr, len(values))
 
     def _remove_goal(self, goal: Goal) -> None:
         """Remove a substate and everything below it (``remove_existing_context...``)."""
