@@ -1287,27 +1287,56 @@ def _choose_index(plan: _Plan) -> None:
     plan.index = (best[2][1], best[0][1])  # type: ignore[assignment]
 
 
-def _join_cost(cond: Condition, bound: set[str]) -> int:
-    """Estimated fan-out class: 0 for a check (attribute and value fixed), 1 for a
-    constant attribute with a new value, 2 when a relational test must wait for a
-    variable bound later (the join cannot prune yet), 3 for a variable attribute."""
+def _join_cost(cond: Condition, bound: set[str], singletons: set[str]) -> int:
+    """Estimated fan-out class: 0 for a check or a constant test (attribute and value
+    fixed), 1 for a constant attribute with a new value (or a join on the value), 2 when
+    a relational test must wait for a variable bound later (the join cannot prune yet),
+    3 for a variable attribute, 4 for an existence test (``(<s> ^step)``: its value is used
+    nowhere else).  Existence tests go last because a flag like ``^step`` changes often,
+    and every change of a condition rebuilds all the tokens below it."""
 
     def fixed(test: Test) -> bool:  # binds nothing new: a constant, a check or a filter
         return set(equality_vars(test)) <= bound
 
     if not fixed(cond.attr_test):
         return 3
+    values = set(equality_vars(cond.value_test))
     if not bound.intersection(equality_vars(cond.id_test)):
-        return 1  # joined on its bound value (see _join_order)
-    if fixed(cond.value_test):
+        if values and values <= bound:
+            return 1  # joined on its bound value (see _join_order)
+        if not values:
+            return 0
+    elif fixed(cond.value_test):
         return 0
+    if values - bound and values - bound <= singletons:
+        return 4
     own = set().union(*(equality_vars(t) for t in _fields(cond)))
     pending = set().union(*(relational_vars(t) for t in _fields(cond))) - bound - own
     return 2 if pending else 1
 
 
+def _variables_of(item: object) -> Iterator[str]:
+    """Every variable occurrence in a condition element, action or value (recursively)."""
+    if isinstance(item, Var):
+        yield item.name
+    elif isinstance(item, (tuple, list)):
+        for part in item:
+            yield from _variables_of(part)
+    elif hasattr(item, "__dataclass_fields__"):
+        for name in item.__dataclass_fields__:  # type: ignore[attr-defined]
+            yield from _variables_of(getattr(item, name))
+
+
+def _singletons(production: Production) -> set[str]:
+    """Variables that occur once in the whole production (conditions and actions)."""
+    counts: dict[str, int] = {}
+    for name in _variables_of((production.conditions, production.actions)):
+        counts[name] = counts.get(name, 0) + 1
+    return {name for name, count in counts.items() if count == 1}
+
+
 def _join_order(elements: tuple[ConditionElement, ...], bound: dict[str, int], scope: set[str],
-                first_fixed: bool) -> list[int]:
+                singletons: set[str]) -> list[int]:
     """Most constrained first, keeping linkage: a positive condition joins on an identifier
     already bound, or on its value when that is a bound variable and the attribute a constant
     (a hashed "reverse" join: ``(<b> ^name <n>)`` with ``<n>`` bound finds the one block
@@ -1340,8 +1369,6 @@ def _join_order(elements: tuple[ConditionElement, ...], bound: dict[str, int], s
         return (isinstance(cond.attr_test, Const)
                 and bool(age.keys() & set(equality_vars(cond.value_test))))
 
-    if first_fixed and remaining:
-        place(0)
     while remaining:
         for index in list(remaining):
             element = elements[index]
@@ -1358,7 +1385,7 @@ def _join_order(elements: tuple[ConditionElement, ...], bound: dict[str, int], s
         linked = [i for i in positives if age.keys() & set(equality_vars(elements[i].id_test))
                   or value_linked(elements[i])]
         pool = linked or [i for i in positives if elements[i].goal is not None] or positives
-        place(min(pool, key=lambda i: (_join_cost(elements[i], set(age)),
+        place(min(pool, key=lambda i: (_join_cost(elements[i], set(age), singletons),
                                        -recency(elements[i]), i)))
     return order
 
@@ -1398,8 +1425,8 @@ class Rete:
         conditions = production.conditions
         scope = _bound_by(conditions)
         var_pos: dict[str, int] = {}
-        bottom, order = self._build_scope(conditions, self._root, var_pos, 0, scope, True,
-                                          set())
+        bottom, order = self._build_scope(conditions, self._root, var_pos, 0, scope,
+                                          _singletons(production), set())
         layout = _Layout(order, sorted((n, p) for n, p in var_pos.items() if n in scope))
         pnode = _ProductionNode(self, bottom, production, layout)
         bottom.children.append(pnode)
@@ -1522,14 +1549,15 @@ class Rete:
 
     def _build_scope(self, elements: tuple[ConditionElement, ...], parent: _Node,
                      var_pos: dict[str, int], nvals: int, scope: set[str],
-                     first_fixed: bool, states: set[str]) -> tuple[_Node, list[int]]:
-        order = _join_order(elements, var_pos, scope, first_fixed)
+                     singletons: set[str], states: set[str]) -> tuple[_Node, list[int]]:
+        order = _join_order(elements, var_pos, scope, singletons)
         deferred: list[tuple[int, str, str]] = []
         node = parent
         for index in order:
             element = elements[index]
             if isinstance(element, ConjunctiveNegation):
-                node = self._build_ncc(element, node, dict(var_pos), nvals, scope, set(states))
+                node = self._build_ncc(element, node, dict(var_pos), nvals, scope, singletons,
+                                       set(states))
                 continue
             plan = _plan_condition(element, var_pos, nvals, deferred, states)
             if element.goal is not None and not element.negated:
@@ -1563,10 +1591,11 @@ class Rete:
         return node
 
     def _build_ncc(self, ncc: ConjunctiveNegation, parent: _Node, var_pos: dict[str, int],
-                   nvals: int, scope: set[str], states: set[str]) -> _Node:
+                   nvals: int, scope: set[str], singletons: set[str], states: set[str]
+                   ) -> _Node:
         inner_scope = scope | _bound_by(ncc.conditions)
-        bottom, _ = self._build_scope(ncc.conditions, parent, var_pos, nvals, inner_scope, False,
-                                      states)
+        bottom, _ = self._build_scope(ncc.conditions, parent, var_pos, nvals, inner_scope,
+                                      singletons, states)
         key = ("ncc", id(bottom))
         node = parent.child_map.get(key)
         if node is not None:
