@@ -74,6 +74,7 @@ class Agent:
         self.exploration = dec.Exploration()
         self.srand(seed)
         self._productions: dict[str, ProductionInfo] = {}
+        self._load_count = 0
         self._dir_stack: list[Path] = []
         self.multi_attributes: dict[str, int] = {}
         self.warnings = True
@@ -199,7 +200,13 @@ class Agent:
         if production.name in self._productions:
             self.excise(production.name)
         self.matcher.add_production(production)
-        self._productions[production.name] = ProductionInfo.of(production)
+        info = ProductionInfo.of(production)
+        self._load_count += 1
+        info.load_index = self._load_count
+        self._productions[production.name] = info
+        # Matches that exist at load time are queued now, in load order, as the kernel
+        # makes them when it adds the production to its Rete.
+        self._collect_changes(in_match_order=True)
 
     def excise(self, name: str) -> None:
         """Remove a production; its i-supported preferences retract in the next cycle."""
@@ -654,9 +661,16 @@ class Agent:
 
     # ------------------------------------------------------------- matches
 
-    def _collect_changes(self) -> None:
-        """Move the matcher's new and retracted matches into the goals' queues."""
+    def _collect_changes(self, in_match_order: bool = False) -> None:
+        """Move the matcher's new and retracted matches into the goals' queues.
+
+        New matches are queued in the order the kernel's Rete would have made them: by
+        the newest WME they match, and for one WME the later-loaded production first (its
+        node is activated first); firing then takes them newest first, like the kernel's
+        match-set lists."""
         new, gone = self.matcher.take_changes()
+        if len(new) > 1 and not in_match_order:
+            new = sorted(new, key=self._creation_key)
         for match in gone:
             inst = self._inst_of.pop(match, None)
             if inst is None:
@@ -694,6 +708,14 @@ class Agent:
             else:
                 goal.pending_i[match] = info
             pending_goal[match] = goal
+
+    def _creation_key(self, match: object) -> tuple[int, int]:
+        newest = 0
+        for wme in match.wmes:  # type: ignore[attr-defined]
+            if wme is not None and wme.timetag > newest:
+                newest = wme.timetag
+        info = self._productions.get(match.production.name)  # type: ignore[attr-defined]
+        return (newest, -(info.load_index if info is not None else 0))
 
     def _schedule_retraction(self, inst: Instantiation) -> None:
         if inst.retracted:

@@ -38,6 +38,8 @@ class ProductionInfo:
     #: Variable names on which the make-actions create preferences.
     make_ids: tuple[str, ...] = ()
     firings: int = 0
+    #: Order in which the production was loaded (a replaced production is loaded anew).
+    load_index: int = 0
 
     @classmethod
     def of(cls, production: Production) -> ProductionInfo:
