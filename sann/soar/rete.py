@@ -1288,31 +1288,37 @@ def _choose_index(plan: _Plan) -> None:
 
 
 def _join_cost(cond: Condition, bound: set[str], singletons: set[str]) -> int:
-    """Estimated fan-out class: 0 for a check or a constant test (attribute and value
-    fixed), 1 for a constant attribute with a new value (or a join on the value), 2 when
-    a relational test must wait for a variable bound later (the join cannot prune yet),
-    3 for a variable attribute, 4 for an existence test (``(<s> ^step)``: its value is used
-    nowhere else).  Existence tests go last because a flag like ``^step`` changes often,
-    and every change of a condition rebuilds all the tokens below it."""
+    """Estimated fan-out class, cheapest first:
+
+    0. a check or a constant test (attribute and value fixed);
+    1. a join on the value, bound elsewhere (``(<b> ^name <n>)``: the WMEs with that value
+       are usually few);
+    2. a constant attribute with a new value (all the values of a multi-valued attribute);
+    3. the same, with a relational test waiting for a variable bound later (cannot prune);
+    4. a variable attribute;
+    5. an existence test (``(<s> ^step)``: its value is used nowhere else).  Existence tests
+       go last because a flag like ``^step`` changes often, and every change of a
+       condition rebuilds all the tokens below it.
+    """
 
     def fixed(test: Test) -> bool:  # binds nothing new: a constant, a check or a filter
         return set(equality_vars(test)) <= bound
 
     if not fixed(cond.attr_test):
-        return 3
+        return 4
     values = set(equality_vars(cond.value_test))
     if not bound.intersection(equality_vars(cond.id_test)):
         if values and values <= bound:
-            return 1  # joined on its bound value (see _join_order)
+            return 1
         if not values:
             return 0
     elif fixed(cond.value_test):
         return 0
     if values - bound and values - bound <= singletons:
-        return 4
+        return 5
     own = set().union(*(equality_vars(t) for t in _fields(cond)))
     pending = set().union(*(relational_vars(t) for t in _fields(cond))) - bound - own
-    return 2 if pending else 1
+    return 3 if pending else 2
 
 
 def _variables_of(item: object) -> Iterator[str]:
