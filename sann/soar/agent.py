@@ -709,13 +709,25 @@ class Agent:
                 goal.pending_i[match] = info
             pending_goal[match] = goal
 
-    def _creation_key(self, match: object) -> tuple[int, int]:
+    def _creation_key(self, match: object) -> tuple[int, int, int]:
+        """Kernel order of match creation: by the newest matched WME; for one WME, by the
+        alpha memory that passed it (the kernel visits ``(* ^attr *)`` before
+        ``(* ^attr value)``), then the later-loaded production first."""
         newest = 0
-        for wme in match.wmes:  # type: ignore[attr-defined]
+        index = -1
+        for i, wme in enumerate(match.wmes):  # type: ignore[attr-defined]
             if wme is not None and wme.timetag > newest:
-                newest = wme.timetag
-        info = self._productions.get(match.production.name)  # type: ignore[attr-defined]
-        return (newest, -(info.load_index if info is not None else 0))
+                newest, index = wme.timetag, i
+        production = match.production  # type: ignore[attr-defined]
+        info = self._productions.get(production.name)
+        mask = 0
+        if index >= 0:
+            cond = production.conditions[index]
+            if type(getattr(cond, "attr_test", None)) is Const:
+                mask |= 2
+            if type(getattr(cond, "value_test", None)) is Const:
+                mask |= 4
+        return (newest, mask, -(info.load_index if info is not None else 0))
 
     def _schedule_retraction(self, inst: Instantiation) -> None:
         if inst.retracted:
