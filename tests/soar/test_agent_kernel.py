@@ -5,6 +5,7 @@ decision trace must be the kernel's."""
 from __future__ import annotations
 
 import io
+import random
 import re
 
 import pytest
@@ -149,5 +150,62 @@ def _decision_lines(trace: str) -> list[str]:
 def test_agrees_with_kernel(name: str, tmp_path) -> None:
     theirs, their_trace = kernel_run(AGENTS[name], 15, tmp_path)
     ours, our_trace = our_run(AGENTS[name], 15)
+    assert ours == theirs
+    assert _decision_lines(our_trace) == _decision_lines(their_trace)
+
+
+def generated_agent(seed: int) -> str:
+    """A small random agent: proposals with random preferences, applications that count,
+    preference rules between proposals, and substate rules for every impasse kind."""
+    r = random.Random(seed)
+    ops = ["a", "b", "c", "d"][: r.randint(2, 4)]
+    lines = [f"indifferent-selection --{r.choice(['first', 'last'])}"]
+    lines.append(
+        "sp {init (state <s> ^superstate nil -^count) --> (<s> ^operator <o> + >) (<o> ^name init)}"
+    )
+    lines.append("sp {init*a (state <s> ^operator.name init) --> (<s> ^count 0)}")
+    for op in ops:
+        prefs = r.choice(["+", "+ =", "+ >", "+ <", "+ = 0.5", "+ !", "+ ~", "+ -", "+ = >"])
+        cond = r.choice(["", "^flag yes", "-^flag"])
+        lines.append(
+            f"sp {{p{op} (state <s> ^superstate nil ^count <c> < 5 {cond})"
+            f" --> (<s> ^operator <o> {prefs}) (<o> ^name {op})}}"
+        )
+        effect = r.choice(["(<s> ^flag yes)", "(<s> ^flag yes -)", f"(<s> ^note {op})", ""])
+        lines.append(
+            f"sp {{ap{op} (state <s> ^operator.name {op} ^count <c>)"
+            f" --> (<s> ^count <c> - (+ <c> 1)) {effect} (write {op} (crlf))}}"
+        )
+    for _ in range(r.randint(0, 3)):
+        x, y = r.sample(ops, 2)
+        kind = r.choice([">", "<", "="])
+        name = {">": "better", "<": "worse", "=": "same"}[kind]
+        lines.append(
+            f"sp {{pref*{x}*{y}*{name} (state <s> ^operator <x> + ^operator <y> +)"
+            f" (<x> ^name {x}) (<y> ^name {y}) --> (<s> ^operator <x> {kind} <y>)}}"
+        )
+    first, last = ops[0], ops[-1]
+    lines += [
+        "sp {tie (state <s> ^impasse << tie conflict >> ^superstate <ss> ^item <i>)"
+        f" (<i> ^name {first}) --> (<ss> ^operator <i> >)}}",
+        "sp {tie2 (state <s> ^impasse << tie conflict >> ^superstate <ss> ^item <i>)"
+        f" (<i> ^name {last}) --> (<ss> ^operator <i> !)}}",
+        "sp {elab (state <s> ^superstate nil ^count <c>) --> (<s> ^double (* <c> 2))}",
+        "sp {snc (state <s> ^impasse no-change ^attribute state ^superstate <ss>)"
+        " (<ss> ^count <c>) --> (<ss> ^count <c> - (+ <c> 1))}",
+        "sp {onc (state <s> ^impasse no-change ^attribute operator ^superstate <ss>)"
+        " (<ss> ^operator <o>) --> (<s> ^operator <q> +) (<q> ^name fix)}",
+        "sp {oncfix (state <s> ^operator.name fix ^superstate <ss>) (<ss> ^count <c>)"
+        " --> (<ss> ^count <c> - (+ <c> 10))}",
+        "sp {done (state <s> ^superstate nil ^count > 4) --> (write |done| (crlf)) (halt)}",
+    ]
+    return "\n".join(lines) + "\n"
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_generated_agents_agree_with_kernel(seed: int, tmp_path) -> None:
+    text = generated_agent(seed)
+    theirs, their_trace = kernel_run(text, 15, tmp_path)
+    ours, our_trace = our_run(text, 15)
     assert ours == theirs
     assert _decision_lines(our_trace) == _decision_lines(their_trace)
