@@ -124,34 +124,9 @@ def cup_model_cloud() -> ModelCloud:
     return model_cloud_from_mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces), 6000, 0)
 
 
-def _padded(arrays: list[np.ndarray], fill: float, width: int | None = None) -> np.ndarray:
-    """Stack ragged per-template arrays into (N, F, ...) with ``fill`` padding."""
-    width = width or max(len(a) for a in arrays)
-    out = np.full((len(arrays), width) + arrays[0].shape[1:], fill, dtype=arrays[0].dtype)
-    for i, a in enumerate(arrays):
-        out[i, : len(a)] = a
-    return out
-
-
-@lru_cache(maxsize=4)
-def _stacked(templates_key: str) -> dict[str, np.ndarray]:
-    ts = _TEMPLATE_SETS[templates_key]
-    return {
-        "color": _padded(ts.color_features, -1),
-        "depth": _padded(ts.depth_features, -1),
-        "offsets": _padded([o.astype(np.float64) for o in ts.depth_offsets], np.nan),
-        "color_patches": _padded(ts.color_patches, -1),
-        "depth_patches": _padded(ts.depth_patches, -1),
-    }
-
-
-_TEMPLATE_SETS: dict[str, TemplateSet] = {}
-
-
 def stacked_features(templates: TemplateSet) -> dict[str, np.ndarray]:
     """Per-template features, depth offsets and patch labels padded into dense arrays."""
-    _TEMPLATE_SETS[templates.key] = templates
-    return _stacked(templates.key)
+    return templates.stacked
 
 
 def patch_filter(templates: TemplateSet, matches: Matches, rule: PatchRule) -> np.ndarray:

@@ -23,6 +23,7 @@ import json
 import os
 import tempfile
 from dataclasses import asdict, dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 import cv2
@@ -95,6 +96,29 @@ class TemplateSet:
 
     def __len__(self) -> int:
         return len(self.rotations)
+
+    @cached_property
+    def stacked(self) -> dict[str, np.ndarray]:
+        """The ragged per-template arrays padded into (N, F, ...) arrays for vectorised use.
+
+        Features and patch labels are padded with -1 (label -1 never responds, patch -1
+        belongs to no patch), depth offsets with NaN.
+        """
+        return {
+            "color": _padded(self.color_features, -1),
+            "depth": _padded(self.depth_features, -1),
+            "offsets": _padded([o.astype(np.float64) for o in self.depth_offsets], np.nan),
+            "color_patches": _padded(self.color_patches, -1),
+            "depth_patches": _padded(self.depth_patches, -1),
+        }
+
+
+def _padded(arrays: list[np.ndarray], fill: float) -> np.ndarray:
+    width = max(len(a) for a in arrays)
+    out = np.full((len(arrays), width) + arrays[0].shape[1:], fill, dtype=arrays[0].dtype)
+    for i, a in enumerate(arrays):
+        out[i, : len(a)] = a
+    return out
 
 
 @dataclass(frozen=True)
