@@ -9,6 +9,11 @@ Two matchers with one interface (see notes/RETE-API.md):
 - :class:`BruteForceMatcher` — a naive join over all WMEs, written to be obviously correct.
   It is the oracle of the property tests.
 
+The Rete joins conditions in its own order (``_join_order``): constant tests and checks
+first, then joins hashed on a bound value, then fan-out over multi-valued attributes,
+following the most recently reached object; negations as soon as their variables are bound;
+existence tests such as ``(<s> ^step)`` last.  ``Match.wmes`` stays in written order.
+
 Matching follows the real Soar 9.6 kernel (checked with ``soar_sml``):
 
 - constants and variables compare as Soar symbols: ``1``, ``1.0`` and ``|1|`` are three
