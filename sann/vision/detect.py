@@ -6,9 +6,13 @@ cup's centre projects relative to its corner and how far behind the surface unde
 feature the centre lies, so the centre is the matched pixel back-projected at the median of
 (measured depth + offset). The template's rotation was rendered with the cup on the optical
 axis; turning it by the rotation that takes the optical axis onto the ray through the centre
-gives the cup's rotation in the frame. ICP on the depth points then does the fine alignment.
+gives the cup's rotation in the frame. ICP on the depth points then does the fine alignment,
+and a refined pose is kept only if the model, projected at that pose, agrees with the measured
+depth (``depth_agreement``); for a cup seen from the side, whose two ends LineMod can confuse,
+the end-over-end twin is refined as well and the better-agreeing one kept.
 
-``method="linemod"`` is the plain baseline (LineMod matches, NMS, no patch rule, no ICP);
+``method="linemod"`` is the plain baseline (LineMod matches, NMS, no patch rule, no ICP;
+``icp=True`` adds the same refinement and verification without the patch rule);
 ``method="patch"`` is Patch-LineMod with ICP, as in the paper's pipeline.
 """
 
@@ -124,16 +128,11 @@ def cup_model_cloud() -> ModelCloud:
     return model_cloud_from_mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces), 6000, 0)
 
 
-def stacked_features(templates: TemplateSet) -> dict[str, np.ndarray]:
-    """Per-template features, depth offsets and patch labels padded into dense arrays."""
-    return templates.stacked
-
-
 def patch_filter(templates: TemplateSet, matches: Matches, rule: PatchRule) -> np.ndarray:
     """Boolean per match: does it pass the Patch-LineMod rule?"""
     if len(matches) == 0:
         return np.zeros(0, dtype=bool)
-    st = stacked_features(templates)
+    st = templates.stacked
     offsets = np.stack([matches.x, matches.y], axis=1)
     tid = matches.template_id
     active = []
@@ -162,7 +161,7 @@ def _ray_rotation(ray: np.ndarray) -> np.ndarray:
 def coarse_poses(templates: TemplateSet, matches: Matches, index: np.ndarray,
                  depth_mm: np.ndarray, K: np.ndarray) -> Candidates:
     """Pose hypotheses of the matches ``index``; those without depth support are dropped."""
-    st = stacked_features(templates)
+    st = templates.stacked
     tid = matches.template_id[index]
     # A match's corner lies 0..T-1 px above-left of the true one (see match_templates); the
     # middle of that range is the unbiased estimate.

@@ -194,7 +194,7 @@ def draw_patches(ax_image, ax_embedding, templates, template_id: int, modality: 
     Returns the patch labels drawn.
     """
     from sann.vision.camera import make_pose
-    from sann.vision.patch_linemod import _feature_descriptor, cluster_features, tsne_small
+    from sann.vision.patch_linemod import cluster_features, feature_descriptor, tsne_small
     from sann.vision.render import render_cup
 
     params = templates.params
@@ -217,7 +217,7 @@ def draw_patches(ax_image, ax_embedding, templates, template_id: int, modality: 
             space, name = feats[:, :2].astype(float) * [1, -1], "feature position"
         else:
             perplexity = float(min(30.0, max(2.0, (len(feats) - 1) / 3.0)))
-            space, name = tsne_small(_feature_descriptor(feats), perplexity), "t-SNE embedding"
+            space, name = tsne_small(feature_descriptor(feats), perplexity), "t-SNE embedding"
         ax_embedding.scatter(space[:, 0], space[:, 1], c=labels, cmap="tab10", s=20, vmin=0,
                              vmax=9)
         ax_embedding.set_title(f"clustered in: {name}")

@@ -26,9 +26,11 @@ __all__ = [
     "PatchRule",
     "accept_candidate",
     "cluster_features",
+    "feature_descriptor",
     "feature_responses",
     "patch_activity",
     "spread",
+    "tsne_small",
 ]
 
 Clustering = Literal["kmeans", "tsne+kmeans"]
@@ -47,7 +49,7 @@ class PatchRule:
     min_score: float = 70.0
 
 
-def _feature_descriptor(features: np.ndarray) -> np.ndarray:
+def feature_descriptor(features: np.ndarray) -> np.ndarray:
     """(x, y) plus the orientation on a circle scaled to pixels, for t-SNE's neighbourhoods."""
     xy = features[:, :2].astype(np.float64)
     angle = features[:, 2].astype(np.float64) * (np.pi / 8.0)
@@ -132,7 +134,7 @@ def cluster_features(
         data = features[:, :2].astype(np.float64)
     elif method == "tsne+kmeans":
         perplexity = float(min(30.0, max(2.0, (n - 1) / 3.0)))
-        data = tsne_small(_feature_descriptor(features), perplexity)
+        data = tsne_small(feature_descriptor(features), perplexity)
     else:
         raise ValueError(f"unknown clustering {method!r}; use 'kmeans' or 'tsne+kmeans'")
     raw = KMeans(n_clusters=n_patches, n_init=4, random_state=seed).fit_predict(data)
