@@ -949,9 +949,13 @@ class Agent:
             removes: list[WME] = []
             for slot in reversed(changed):
                 slot.changed = False
+                before = len(removes)
                 self._diff_slot(slot, adds, removes)
-            if self._gds_index and self._gds_violations(removes):
-                adds = [(slot, value) for slot, value in adds if self._still_wanted(slot, value)]
+                if self._gds_index and len(removes) > before:
+                    # Like the kernel, while deciding the slot: a substate whose GDS holds
+                    # a WME about to go is removed now; WMEs already decided still come
+                    # and go in this phase, later slots see the substate gone.
+                    self._gds_violations(removes[before:])
             for slot, value in adds:
                 wme = slot.wmes[_vkey(value)] = self._add_wme(slot.id, slot.attr, value)
                 if self._level_of(slot.id) > 1:
@@ -985,18 +989,6 @@ class Agent:
                     self._remove_goal(goal)
                     removed = True
         return removed
-
-    def _still_wanted(self, slot: Slot, value: Symbol) -> bool:
-        key = _vkey(value)
-        prefs = slot.prefs
-        if not any(_vkey(p.value) == key for p in prefs.get(ACCEPTABLE, ())):
-            slot.wmes.pop(key, None)
-            return False
-        for ptype in (REJECT, PROHIBIT):
-            if any(_vkey(p.value) == key for p in prefs.get(ptype, ())):
-                slot.wmes.pop(key, None)
-                return False
-        return True
 
     def _collect_unlinked(self) -> None:
         """Soar 9.6 drops the o-supported preferences (and input WMEs) of identifiers that
