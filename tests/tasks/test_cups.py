@@ -1,0 +1,306 @@
+"""rules/cups.soar and the cup samples: known plans, ours == the real kernel == a reference of
+the documented enumeration, labels from the true poses, samples built from estimated poses."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sann.fusion import logical_item
+from sann.tasks.cups import (
+    CUP_NAMES,
+    FEATURE_NAMES,
+    CupPlanner,
+    CupScene,
+    CupsDataParams,
+    build_split,
+    detections_from_array,
+    label_detections,
+    make_dataset,
+    observe_pile,
+    pile_spec,
+    plan_cups,
+)
+from sann.vision.camera import axis_angle, make_pose, rotation_to
+from sann.vision.detect import Detection
+from sann.vision.piles import make_pile
+
+#: The quick experiment's small view sphere: trained once, then loaded from the cache.
+PARAMS = CupsDataParams(templates={"tilt_step_deg": 20.0, "distances_mm": (630.0,)})
+
+
+def _scene(n: int, over_pairs: list[tuple[int, int]], on_pairs: tuple = ()) -> CupScene:
+    over = np.zeros((n, n), dtype=bool)
+    on = np.zeros((n, n), dtype=bool)
+    for a, b in over_pairs:
+        over[a, b] = True
+    for a, b in on_pairs:
+        on[a, b] = over[a, b] = True
+    pos = np.column_stack([np.arange(n) * 100.0, np.zeros(n), np.full(n, 60.0)])
+    return CupScene(pos, np.tile([0.0, 0.0, 1.0], (n, 1)), np.full(n, 90.0), over, on)
+
+
+def _texts(plans: dict) -> dict[str, list[str]]:
+    return {CUP_NAMES[t]: [f"{s.t_o}:{s.order}" for s in seqs] for t, seqs in plans.items()}
+
+
+def _reference(scene: CupScene, target: int, cap: int) -> list[str]:
+    """The enumeration the rule file's header documents, in plain Python."""
+    cover = scene.over | scene.on
+    done: list[str] = []
+    plans = [(frozenset(), "", cap)]
+    while plans:
+        advanced = []
+        for removed, path, budget in plans:
+            needed, covered, stack = {target}, set(), [target]
+            while stack:
+                x = stack.pop()
+                for a in np.flatnonzero(cover[:, x]):
+                    if a in removed:
+                        continue
+                    covered.add(x)
+                    if a not in needed:
+                        needed.add(int(a))
+                        stack.append(int(a))
+            if target not in covered:
+                done.append(f"{len(path) + 1}:{path}{CUP_NAMES[target]}")
+                continue
+            free = sorted(x for x in needed if x != target and x not in covered)
+            if not free:
+                continue  # dead end
+            if len(free) > 1 and budget > 1:
+                advanced.append((removed | {free[1]}, path + CUP_NAMES[free[1]], budget // 2))
+                budget -= budget // 2
+            advanced.append((removed | {free[0]}, path + CUP_NAMES[free[0]], budget))
+        plans = advanced
+    return sorted(done, key=lambda s: (int(s.split(":")[0]), s))
+
+
+def _sml_or_skip() -> None:
+    pytest.importorskip("soar_sml", reason="the real Soar kernel (soar-sml) is not installed")
+
+
+# --------------------------------------------------------------------------- known plans
+
+
+@pytest.mark.parametrize("engine", ["sann", "soar_sml"])
+def test_plans_hand_built_pile(engine: str) -> None:
+    if engine == "soar_sml":
+        _sml_or_skip()
+    # D rests on B, B lies over A, C lies over A; E stands alone.
+    scene = _scene(5, [(1, 0), (2, 0)], on_pairs=((3, 1),))
+    assert _texts(plan_cups(scene, engine=engine)) == {
+        "A": ["4:CDBA", "4:DBCA", "4:DCBA"],  # every order in which D goes before B
+        "B": ["2:DB"],
+        "C": ["1:C"],
+        "D": ["1:D"],
+        "E": ["1:E"],
+    }
+
+
+def test_cycle_is_a_dead_end_and_only_its_victims_fail() -> None:
+    # A over B over C over A (estimated poses can do that), D over A, E alone under nothing
+    scene = _scene(5, [(0, 1), (1, 2), (2, 0), (3, 0)])
+    plans = plan_cups(scene)
+    assert all(plans[t] == [] for t in (0, 1, 2))
+    assert logical_item(s.t_o for s in plans[0]) == 0.0
+    assert _texts(plans)["D"] == ["1:D"] and _texts(plans)["E"] == ["1:E"]
+
+
+def test_cap_and_fork_budget() -> None:
+    # four free cups over A: 24 orders, the binary splitting keeps cap of them
+    scene = _scene(5, [(1, 0), (2, 0), (3, 0), (4, 0)])
+    full = _texts(plan_cups(scene, targets=[0]))["A"]
+    assert full == ["5:BCDEA", "5:BCEDA", "5:BDCEA", "5:BDECA",
+                    "5:CBDEA", "5:CBEDA", "5:CDBEA", "5:CDEBA"]
+    for cap in (1, 2, 3, 5):
+        seqs = plan_cups(scene, targets=[0], cap=cap)[0]
+        assert len(seqs) == cap
+        assert [f"{s.t_o}:{s.order}" for s in seqs] == _reference(scene, 0, cap)
+    assert logical_item(s.t_o for s in plan_cups(scene, targets=[0])[0]) == 8 * 0.5**4
+
+
+def test_relations_from_true_poses_feed_the_plan() -> None:
+    # A upright on the floor, B lying across A's lid, C upright far away
+    a = make_pose(np.eye(3), np.array([0.0, 0.0, 60.0]))
+    b = make_pose(rotation_to([1.0, 0.0, 0.0]), np.array([0.0, 0.0, 120.0 + 43.6]))
+    c = make_pose(np.eye(3), np.array([250.0, 0.0, 60.0]))
+    scene = CupScene.from_world_poses(np.array([a, b, c]), [90.0, 85.0, 80.0])
+    assert scene.over[1, 0] and scene.on[1, 0] and scene.over.sum() == 1
+    assert _texts(plan_cups(scene)) == {"A": ["2:BA"], "B": ["1:B"], "C": ["1:C"]}
+
+
+def test_planner_rejects_bad_input(tmp_path) -> None:
+    scene = _scene(2, [(1, 0)])
+    with pytest.raises(ValueError, match="not rows"):
+        plan_cups(scene, targets=[2])
+    with pytest.raises(ValueError, match="engine"):
+        CupPlanner(engine="clips")
+    with pytest.raises(ValueError, match="cap"):
+        CupPlanner(cap=0)
+    with pytest.raises(ValueError, match="not found"):
+        CupPlanner(rules=tmp_path / "missing.soar")
+    with pytest.raises(ValueError, match="shape"):
+        CupScene(np.zeros((2, 3)), np.zeros((2, 3)), np.zeros(3), np.zeros((2, 2), bool),
+                 np.zeros((2, 2), bool))
+    with pytest.raises(ValueError, match="itself"):
+        CupScene(np.zeros((1, 3)), np.zeros((1, 3)), np.zeros(1), np.ones((1, 1), bool),
+                 np.zeros((1, 1), bool))
+    with pytest.raises(ValueError, match="0..10"):
+        _scene(11, [])
+    assert plan_cups(_scene(0, [])) == {}
+
+
+# --------------------------------------------------------------------------- ours == kernel
+
+
+def _estimated_scenes(n_piles: int = 5, per_pile: int = 10) -> list[CupScene]:
+    """Pose sets as an estimator returns them: true pile poses moved by up to ~10 mm / 10 deg,
+    some cups missed, rows in a random order; relations from those poses."""
+    rng = np.random.default_rng(7)
+    scenes = []
+    for k in range(n_piles):
+        pile = make_pile(int(rng.integers(5, 11)), 500 + k)
+        for _ in range(per_pile):
+            keep = rng.permutation(pile.n_cups)[: int(rng.integers(2, pile.n_cups + 1))]
+            poses = []
+            for pose in pile.poses[keep]:
+                turn = axis_angle(rng.normal(size=3), np.radians(rng.uniform(0, 10)))
+                poses.append(make_pose(turn @ pose[:3, :3],
+                                       pose[:3, 3] + rng.normal(0.0, 5.0, size=3)))
+            scenes.append(CupScene.from_world_poses(np.array(poses),
+                                                    rng.uniform(70, 100, len(poses))))
+    return scenes
+
+
+def _random_relation_scenes(n: int = 20) -> list[CupScene]:
+    """Arbitrary relations, cycles included: the rules must not depend on geometry."""
+    rng = np.random.default_rng(11)
+    out = []
+    for _ in range(n):
+        k = int(rng.integers(1, 11))
+        over = rng.random((k, k)) < rng.uniform(0.05, 0.35)
+        np.fill_diagonal(over, False)
+        on = over & (rng.random((k, k)) < 0.5)
+        out.append(CupScene(rng.normal(0, 100, (k, 3)), np.tile([0.0, 0.0, 1.0], (k, 1)),
+                            rng.uniform(70, 100, k), over, on))
+    return out
+
+
+def test_rules_match_the_kernel_and_the_reference_on_estimated_poses() -> None:
+    _sml_or_skip()
+    scenes = _estimated_scenes() + _random_relation_scenes()
+    assert len(scenes) >= 70
+    covered = 0
+    with CupPlanner("sann") as ours, CupPlanner("soar_sml") as kernel:
+        for scene in scenes:
+            mine, theirs = ours.plan(scene), kernel.plan(scene)
+            assert mine == theirs
+            for t in range(scene.n):
+                assert [f"{s.t_o}:{s.order}" for s in mine[t]] == _reference(scene, t, 8)
+            covered += sum(1 for seqs in mine.values() if seqs and seqs[0].t_o > 1)
+    assert covered > 50  # plenty of targets with cups over them
+
+
+# --------------------------------------------------------------------------- labels
+
+
+def _det(position, axis, score=90.0) -> Detection:
+    return Detection(np.asarray(position, float), rotation_to(axis), score)
+
+
+def test_labels_come_from_the_matched_true_cup() -> None:
+    true = np.array([make_pose(np.eye(3), np.array([0.0, 0.0, 600.0])),
+                     make_pose(np.eye(3), np.array([200.0, 0.0, 600.0]))])
+    graspable = np.array([True, False])
+    dets = [
+        _det([1.0, 2.0, 601.0], [0, 0, 1]),  # cup 0, graspable
+        _det([200.0, 5.0, 600.0], [0, 0.1, 1]),  # cup 1, blocked
+        _det([40.0, 0.0, 600.0], [0, 0, 1]),  # 40 mm off: no cup
+        _det([0.0, 0.0, 600.0], [0, 0, -1]),  # cup 0 turned end over end: no cup (and a dup)
+    ]
+    matched, labels = label_detections(dets, true, graspable)
+    assert matched.tolist() == [0, 1, -1, -1]
+    assert labels.tolist() == [1, 0, 0, 0]
+    loose, _ = label_detections(dets[2:3], true, graspable, match_mm=50.0)
+    assert loose.tolist() == [0]
+    with pytest.raises(ValueError, match="labels for"):
+        label_detections(dets, true, graspable[:1])
+
+
+# --------------------------------------------------------------------------- samples
+
+
+@pytest.fixture(scope="module")
+def planner():
+    with CupPlanner() as p:
+        yield p
+
+
+@pytest.fixture(scope="module")
+def observed(planner):
+    n, pile_seed, noise_seed = pile_spec(0, "test", 3, PARAMS)
+    pile = make_pile(n, pile_seed)
+    return pile, observe_pile(pile, PARAMS.camera(), PARAMS, planner, noise_seed,
+                              ("patch", "linemod"))
+
+
+def test_observe_pile_uses_estimated_poses(observed) -> None:
+    pile, obs = observed
+    camera = PARAMS.camera()
+    dets = detections_from_array(obs.pose_array)
+    assert 1 <= obs.n_detections == len(dets) <= pile.n_cups
+    assert np.all(obs.pose_array[obs.n_detections:] == 0)
+    # the rules' scene is the detections moved to the world frame, not the true poses
+    for det, pos in zip(dets, obs.scene.positions, strict=True):
+        assert np.allclose(camera.pose[:3, :3] @ det.position_mm + camera.pose[:3, 3], pos)
+    assert not any(np.allclose(obs.scene.positions[0], c) for c in pile.centres)
+    cam_true = camera.world_to_camera @ pile.poses
+    matched, labels = label_detections(dets, cam_true, obs.true_graspable)
+    assert np.array_equal(matched, obs.matched) and np.array_equal(labels, obs.labels)
+    assert obs.labels.sum() <= obs.true_graspable.sum()
+    for plans, value in zip(obs.plans, obs.logical, strict=True):
+        t_os = [int(p.split(":")[0]) for p in plans.split()]
+        assert value == pytest.approx(logical_item(t_os))
+    assert set(obs.scores) == {"patch", "linemod"}
+    assert obs.scores["patch"].n_detections == obs.n_detections
+
+
+def test_build_split_rows_and_determinism(planner) -> None:
+    first = build_split("train", 1, 5, PARAMS, planner)
+    again = build_split("train", 1, 5, PARAMS, planner)
+    for key in first:
+        if key.startswith("det_") and not key.endswith("errors"):
+            assert np.array_equal(first[key][:, :4], again[key][:, :4])  # column 4: seconds
+        elif key != "seconds":
+            assert np.array_equal(first[key], again[key]), key
+    X, target, image = first["X"], first["target"], first["image"]
+    assert X.shape == (len(first["y"]), len(FEATURE_NAMES)) == (len(target), 131)
+    for row, t, i in zip(X, target, image, strict=True):
+        assert np.array_equal(row[:130], first["poses"][i].ravel().astype(np.float32))
+        assert row[130] == t < first["frames"][i, 1]
+    assert np.all(image == 0) and len(image) == first["frames"][0, 1] > 0
+    assert set(np.unique(first["y"])) <= {0, 1}
+    assert first["det_patch"].shape == (1, 5)
+
+
+def test_make_dataset_caches_and_regenerates_frames(tmp_path, monkeypatch) -> None:
+    from sann import cache
+
+    monkeypatch.setattr(cache, "cache_dir", lambda: tmp_path)  # datasets only, not templates
+    ds = make_dataset(1, 1, seed=3, params=PARAMS)
+    assert ds.meta["cache_hit"] == {"train": False, "test": False}
+    hit = make_dataset(1, 1, seed=3, params=PARAMS)
+    assert hit.meta["cache_hit"] == {"train": True, "test": True}
+    assert np.array_equal(ds.X_train, hit.X_train) and np.array_equal(ds.y_test, hit.y_test)
+    assert set(ds.detection_test) == {"patch", "linemod"} and set(ds.detection_train) == {"patch"}
+    assert np.all(ds.image_test == 1) and np.all(ds.image_train == 0)
+    pile, clean, seen = ds.frame(1)
+    assert pile.n_cups == ds.frames_test[0, 0]
+    assert seen.depth_mm.shape == clean.depth_mm.shape == (480, 640)
+    with pytest.raises(ValueError, match="not a frame"):
+        ds.pile(2)
+    with pytest.raises(ValueError, match="positive integer"):
+        make_dataset(0, 1)
+    with pytest.raises(ValueError, match="min_cups"):
+        CupsDataParams(min_cups=5, max_cups=3)
