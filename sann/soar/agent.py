@@ -335,6 +335,7 @@ class Agent:
         self._phase_timetag = 0
         self._context_changed: Goal | None = None
         self._neg_watch: dict[tuple, list[tuple]] = {}
+        self._justification_index: dict[tuple, Instantiation] = {}
         self._neg_keys: dict[Instantiation, list[tuple]] = {}
         self._dead_ids: list[Identifier] = []
         self._sources: weakref.WeakKeyDictionary[WME, Instantiation] = weakref.WeakKeyDictionary()
@@ -845,6 +846,8 @@ class Agent:
         if inst.goal.level > 1 and not any(p.live for p in inst.prefs):
             inst.goal.insts.discard(inst)
         if inst.is_justification:
+            if self._justification_index.get(inst.match) is inst:  # type: ignore[arg-type]
+                del self._justification_index[inst.match]  # type: ignore[arg-type]
             for key in self._neg_keys.pop(inst, ()):
                 bucket = self._neg_watch.get(key)
                 if bucket is not None:
@@ -1382,6 +1385,7 @@ class Agent:
             copy.o_supported = bool(operators) and not any(pref.id is op for op in operators)
             just.prefs.append(copy)
         self._new_justifications.append(just)
+        self._replace_duplicate_justification(just)
         self._justification_matches(inst.goal, home.level)
         if not all(p.o_supported for p in just.prefs):
             for wme in grounds:
@@ -1389,6 +1393,22 @@ class Agent:
             self._watch_negations(just, visited, inst.goal.level)
         if home.level > 1:
             home.insts.add(just)
+
+    def _replace_duplicate_justification(self, just: Instantiation) -> None:
+        """A justification identical to a live one (same conditions, same results)
+        replaces it: the kernel retracts the old one in the next cycle (measured)."""
+        signature = (
+            frozenset(w.timetag for w in just.grounds),
+            frozenset(
+                (p.type, id(p.id), _vkey(p.attr), _vkey(p.value), _vkey(p.referent))
+                for p in just.prefs
+            ),
+        )
+        old = self._justification_index.get(signature)
+        if old is not None and not old.retracted:
+            self._schedule_retraction(old)
+        self._justification_index[signature] = just
+        just.match = signature
 
     def _justification_matches(self, source: Goal, result_level: int) -> None:
         """The kernel adds a justification to its Rete for each level a result passes
