@@ -11,6 +11,7 @@ line, before or between productions)::
 
     # differential: random          choices are random: compare only halting and output
     # differential: decisions 500   decision limit for the run (default 20000)
+    # differential: warnings        the kernel is expected to print warnings for this agent
     # input: item name=apple price=3     an identifier ^item under the input-link with
                                          constant children (ints and floats are typed)
     # input: disks=5                     a constant directly on the input-link
@@ -52,6 +53,7 @@ class AgentSpec:
     random: bool = False
     decisions: int = DEFAULT_DECISIONS
     inputs: Inputs = ()
+    warnings: bool = False
 
 
 @dataclass
@@ -79,7 +81,7 @@ def read_spec(path: str | Path) -> AgentSpec:
     """Parse the ``# differential:`` and ``# input:`` header comments of an agent file."""
     path = Path(path)
     text = path.read_text()
-    random, decisions, inputs = False, DEFAULT_DECISIONS, []
+    random, warnings, decisions, inputs = False, False, DEFAULT_DECISIONS, []
     for kind, body in _HEADER.findall(text):
         if kind == "input":
             inputs.append(_parse_input(body, path))
@@ -87,11 +89,13 @@ def read_spec(path: str | Path) -> AgentSpec:
         words = body.split()
         if words == ["random"]:
             random = True
+        elif words == ["warnings"]:
+            warnings = True
         elif len(words) == 2 and words[0] == "decisions" and words[1].isdigit():
             decisions = int(words[1])
         else:
             raise ValueError(f"{path}: unknown '# differential:' header {body!r}")
-    return AgentSpec(path, random, decisions, tuple(inputs))
+    return AgentSpec(path, random, decisions, tuple(inputs), warnings)
 
 
 def _parse_input(body: str, path: Path) -> tuple[str, Any]:
