@@ -304,3 +304,13 @@ def test_make_dataset_caches_and_regenerates_frames(tmp_path, monkeypatch) -> No
         make_dataset(0, 1)
     with pytest.raises(ValueError, match="min_cups"):
         CupsDataParams(min_cups=5, max_cups=3)
+
+
+def test_cache_key_follows_the_vision_code_not_its_prose() -> None:
+    from sann.tasks.cups import _code_dump, vision_sha256
+
+    plain = _code_dump("def f(x):\n    return x + 1\n")
+    documented = '"""Module."""\ndef f(x):\n    """Doc."""\n    return x + 1  # note\n'
+    assert _code_dump(documented) == plain
+    assert _code_dump("def f(x):\n    return x + 2\n") != plain
+    assert vision_sha256() == vision_sha256()
