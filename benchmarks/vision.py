@@ -115,8 +115,8 @@ def pose_part(piles: int, seed: int, anchor: float) -> dict[str, float]:
 
     Speed: ``detect_cups`` (Patch-LineMod + ICP) per 640 x 480 frame with the default template
     set (>= 300 templates), and its ratio to plain ``cv2.linemod`` matching of the same frame
-    with the same templates (the brief's anchor). Accuracy: plain LineMod, LineMod + the same
-    ICP/verification back end without the patch rule, and Patch-LineMod on the same piles.
+    with the same templates (the brief's anchor). Accuracy on the same piles: plain LineMod,
+    Patch-LineMod, and ablations separating the patch rule from the ICP/verification back end.
     """
     from sann.vision.camera import K_PRIMESENSE
     from sann.vision.detect import DetectConfig, detect_cups
@@ -145,9 +145,14 @@ def pose_part(piles: int, seed: int, anchor: float) -> dict[str, float]:
           f"{full_cpu * 1e3:.1f} ms  (ratio {full_cpu / match_cpu:.2f}; robust to a loaded "
           f"machine)")
     frames = make_frames(piles, seed)
+    # Ablations: the patch rule without the ICP/verification back end, and the back end
+    # without the patch rule at the plain threshold (80) and at Patch-LineMod's (70).
     configs = {
         "linemod": DetectConfig(method="linemod", templates=params),
+        "patch, no icp": DetectConfig(method="patch", templates=params, icp=False),
         "linemod+icp": DetectConfig(method="linemod", templates=params, icp=True),
+        "linemod70+icp": DetectConfig(method="linemod", templates=params, icp=True,
+                                      linemod_threshold=70.0),
         "patch-linemod": config,
     }
     scores = evaluate_methods(frames, configs, K_PRIMESENSE)
