@@ -26,9 +26,10 @@ Modes:
 
 Ground truth (from the TRUE geometry): a top-down two-finger gripper can grasp a block now iff
 nothing rests on it and its fingers fit on both sides along x or along y, i.e. the slabs of
-width ``gripper_finger_width`` beside both faces of that pair are free of other blocks from the
-block's bottom upward (the fingers come down from above, so the space beside the faces must be
-free at the block's height and above it).
+width ``gripper_finger_width`` beside both faces of that pair (their extent along the face
+shrunk by ``finger_margin`` at each edge: the finger pad) are free of other blocks over the
+block's height range (the fingers close on the faces; a block hanging over a slab higher up,
+e.g. the overhang of a 10-block on a neighbouring stack, is taken to be reached under).
 
 Features (Table 1 of the paper, in this column order): X, Y, Z (observed centre), Distance
 (from the observed centre to the robot base, clipped to 130), Size, Color, Target (the block's
@@ -76,6 +77,9 @@ class BlockWorldParams:
     """Every tunable constant of the block world, in one place.
 
     ``gripper_finger_width``: the free space a finger needs beside a face (units of the table).
+    ``finger_margin``: a finger's pad covers its face except this much at each side edge, so a
+    block that overlaps the finger's slab by less than the margin (a corner grazing it) does not
+    stop it.
     ``neighbour_gap``: a face closer than this to another block's face makes it a neighbour
     feature; equal to the finger width, so the Left..Back features mean "a finger does not fit
     here" up to sensor noise. ``sensor_noise``: standard deviation of the Gaussian noise on each
@@ -90,8 +94,9 @@ class BlockWorldParams:
     """
 
     gripper_finger_width: float = 2.0
+    finger_margin: float = 1.0
     neighbour_gap: float = 2.0
-    sensor_noise: float = 0.3
+    sensor_noise: float = 0.2
     overlap_eps: float = 1.0
     touch_prob: float = 0.35
     near_gap_prob: float = 0.3
@@ -100,8 +105,8 @@ class BlockWorldParams:
     max_blocks: int = MAX_BLOCKS
 
     def __post_init__(self) -> None:
-        for name in ("gripper_finger_width", "neighbour_gap", "sensor_noise", "overlap_eps",
-                     "stack_jitter"):
+        for name in ("gripper_finger_width", "finger_margin", "neighbour_gap", "sensor_noise",
+                     "overlap_eps", "stack_jitter"):
             value = getattr(self, name)
             if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
                 raise ValueError(f"BlockWorldParams.{name} must be a finite number >= 0, "
@@ -249,7 +254,10 @@ class _Builder:
         self.size: list[float] = []
         self.support: list[int] = []
 
-    def fits(self, centre: np.ndarray, size: float) -> bool:
+    def fits(self, centre: np.ndarray, size: float, support: int = -1,
+             clearance: float = 0.0) -> bool:
+        """On the table, overlapping nothing (nor coming within ``clearance`` of anything in
+        x-y), and, when stacked, touching the top of its support only: no block bridges two."""
         lo, hi = centre - size / 2, centre + size / 2
         if lo[0] < -_EPS or lo[1] < -_EPS or hi[0] > TABLE_SIZE + _EPS or hi[1] > TABLE_SIZE + _EPS:
             return False
@@ -257,7 +265,17 @@ class _Builder:
             return True
         olo, ohi = np.array(self.lo), np.array(self.hi)
         ov = np.minimum(hi, ohi) - np.maximum(lo, olo)
-        return not bool((ov > _EPS).all(axis=1).any())
+        if (ov > _EPS).all(axis=1).any():
+            return False
+        if clearance > 0 and (ov[:, :2] > -clearance).all(axis=1).any():
+            return False
+        footprint = (ov[:, 0] > -_EPS) & (ov[:, 1] > -_EPS)
+        if ((np.abs(olo[:, 2] - hi[2]) < _EPS) & footprint).any():
+            return False  # it would tuck under a block placed earlier (a second support)
+        under = (np.abs(ohi[:, 2] - lo[2]) < _EPS) & footprint
+        if support >= 0:
+            under[support] = False
+        return not bool(under.any())
 
     def place(self, centre: np.ndarray, size: float, support: int) -> int:
         self.centre.append(centre)
@@ -294,7 +312,11 @@ class _Builder:
         return np.array([cj[0] + off[0], cj[1] + off[1], cj[2] + sj / 2 + size / 2])
 
     def place_scattered(self, size: float, touch_prob: float) -> int:
+        """A table position: against an earlier table block (probability ``touch_prob``), or
+        anywhere at least two finger widths from every block, so that blocks are near one
+        another only where the generator means it."""
         for _attempt in range(400):
+            clearance = 0.0
             if self.size and self.rng.random() < touch_prob:
                 j = int(self.rng.integers(len(self.size)))
                 if self.support[j] != -1:
@@ -302,7 +324,8 @@ class _Builder:
                 c = self.beside(j, size)
             else:
                 c = self.random_on_table(size)
-            if self.fits(c, size):
+                clearance = 2.0 * self.params.gripper_finger_width
+            if self.fits(c, size, clearance=clearance):
                 return self.place(c, size, -1)
         raise RuntimeError("could not place a block on the table (table too crowded)")
 
@@ -326,7 +349,7 @@ def _build_c2(size: np.ndarray, b: _Builder) -> tuple[_Builder, list[int]]:
         for k in order:
             s = float(size[k])
             c = col.random_on_table(s) if below == -1 else col.on_top(below, s)
-            if not col.fits(c, s):
+            if not col.fits(c, s, below):
                 break
             below = col.place(c, s, below)
         else:
@@ -362,11 +385,13 @@ def _build_c3(size: np.ndarray, b: _Builder) -> tuple[_Builder, list[int]]:
 
 def _place_base(b: _Builder, s: float, touch: float, bases: list[int]) -> int:
     for _attempt in range(400):
+        clearance = 0.0
         if bases and b.rng.random() < touch:
             c = b.beside(bases[int(b.rng.integers(len(bases)))], s)
         else:
             c = b.random_on_table(s)
-        if b.fits(c, s):
+            clearance = 2.0 * b.params.gripper_finger_width
+        if b.fits(c, s, clearance=clearance):
             return b.place(c, s, -1)
     raise RuntimeError("could not place a stack base on the table")
 
@@ -377,7 +402,7 @@ def _place_on_stack(b: _Builder, s: float, stack: int, tops: list[int]) -> int:
     for t in candidates:
         for _attempt in range(8):
             c = b.on_top(tops[t], s)
-            if b.fits(c, s):
+            if b.fits(c, s, tops[t]):
                 slot = b.place(c, s, tops[t])
                 tops[t] = slot
                 return slot
@@ -432,18 +457,20 @@ def rests_on_matrix(scene: Scene) -> np.ndarray:
     return touch & (ox > _EPS) & (oy > _EPS)
 
 
-def _pair_free(scene: Scene, axis: int, width: float) -> np.ndarray:
-    """For each block: both finger slabs along ``axis`` are free from its bottom upward."""
+def _pair_free(scene: Scene, axis: int, width: float, margin: float = 0.0) -> np.ndarray:
+    """For each block: both finger slabs along ``axis`` are free over its height range (the
+    slab spans the face minus ``margin`` at each side edge)."""
     lo, hi = scene.lo(), scene.hi()
     other = 1 - axis
     free = np.ones(scene.n, dtype=bool)
     for side in (-1, 1):
         slab_lo, slab_hi = lo.copy(), hi.copy()
+        slab_lo[:, other] += margin
+        slab_hi[:, other] -= margin
         if side < 0:
             slab_lo[:, axis], slab_hi[:, axis] = lo[:, axis] - width, lo[:, axis]
         else:
             slab_lo[:, axis], slab_hi[:, axis] = hi[:, axis], hi[:, axis] + width
-        slab_hi[:, 2] = np.inf
         o_a = (np.minimum(slab_hi[:, None, axis], hi[None, :, axis])
                - np.maximum(slab_lo[:, None, axis], lo[None, :, axis]))
         o_b = (np.minimum(slab_hi[:, None, other], hi[None, :, other])
@@ -460,8 +487,8 @@ def graspable(scene: Scene, params: BlockWorldParams | None = None) -> np.ndarra
     """Ground-truth label per block (bool, by slot) from the true geometry (see module doc)."""
     params = params or BlockWorldParams()
     clear = ~rests_on_matrix(scene).any(axis=1)
-    w = params.gripper_finger_width
-    return clear & (_pair_free(scene, 0, w) | _pair_free(scene, 1, w))
+    w, m = params.gripper_finger_width, params.finger_margin
+    return clear & (_pair_free(scene, 0, w, m) | _pair_free(scene, 1, w, m))
 
 
 # --------------------------------------------------------------------------- features

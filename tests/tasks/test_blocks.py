@@ -40,6 +40,7 @@ def test_generator_invariants(mode: str) -> None:
         assert set(scene.size.tolist()) <= {5.0, 10.0}
         assert set(scene.color.tolist()) <= {1, 2, 3, 4}
         assert not _overlaps(scene), f"{mode} seed {seed}: blocks overlap"
+        assert (rests_on_matrix(scene).sum(axis=0) <= 1).all()  # no block bridges two
         lo, hi = scene.lo(), scene.hi()
         assert (lo[:, :2] >= -1e-6).all() and (hi[:, :2] <= TABLE_SIZE + 1e-6).all()
         # every block rests on the table or on its support, centre over the support's top
@@ -155,20 +156,28 @@ def test_labels_side_pairs() -> None:
     assert graspable(scene, BlockWorldParams(gripper_finger_width=1.0))[scene.slot("X")]
 
 
-def test_label_overhang_blocks_fingers() -> None:
-    # a 10-block centred on a 5-block overhangs the 5-block's sides: the 5-block is covered,
-    # and a 5-block standing beside the column under the overhang cannot be gripped along x
+def test_label_overhang_and_finger_pads() -> None:
+    # a 10-block centred on a 5-block overhangs it: the 5-block is covered. C stands beside the
+    # column under the overhang: the overhang is above C's height, so C's x fingers fit.
     scene = scene_from_blocks([
         ("A", 5, (50, 50, 2.5)), ("B", 10, (50, 50, 10)), ("C", 5, (42, 50, 2.5)),
     ])
     labels = dict(zip(scene.names, graspable(scene).tolist(), strict=True))
-    assert labels == {"A": False, "B": True, "C": True}  # C: its y pair is free
-    assert not _pair_free(scene, 0, 2.0)[scene.slot("C")]  # B's overhang is over C's x slab
+    assert labels == {"A": False, "B": True, "C": True}
+    assert _pair_free(scene, 0, 2.0)[scene.slot("C")]
+    # E touches C's left face, D its back face: both pairs blocked
     walled = scene_from_blocks([
         ("A", 5, (50, 50, 2.5)), ("B", 10, (50, 50, 10)), ("C", 5, (42, 50, 2.5)),
-        ("D", 5, (42, 55, 2.5)),
+        ("D", 5, (42, 55, 2.5)), ("E", 5, (37, 50, 2.5)),
     ])
     assert not graspable(walled)[walled.slot("C")]
+    # a corner grazing the finger slab by less than the pad margin does not block it
+    grazed = scene_from_blocks([
+        ("A", 10, (50, 50, 5)), ("B", 10, (61, 59.5, 5)), ("C", 10, (39, 40.5, 5)),
+        ("D", 10, (50, 61, 5)), ("E", 10, (50, 39, 5)),
+    ])
+    assert _pair_free(grazed, 0, 2.0, 1.0)[0] and not _pair_free(grazed, 0, 2.0, 0.0)[0]
+    assert graspable(grazed)[0]
 
 
 def test_features_hand_built() -> None:
