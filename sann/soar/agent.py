@@ -336,6 +336,7 @@ class Agent:
         self._context_changed: Goal | None = None
         self._neg_watch: dict[tuple, list[tuple]] = {}
         self._justification_index: dict[tuple, Instantiation] = {}
+        self._pending_gds: list[tuple[Goal, list[WME]]] = []
         self._neg_keys: dict[Instantiation, list[tuple]] = {}
         self._dead_ids: list[Identifier] = []
         self._sources: weakref.WeakKeyDictionary[WME, Instantiation] = weakref.WeakKeyDictionary()
@@ -969,6 +970,8 @@ class Agent:
                 self._update_acceptable_wmes(slot)
             for wme in removes:
                 self._remove_wme(wme)
+            if self._pending_gds:
+                self._extend_gds()
             if self._unlinked:
                 self._collect_unlinked()
             for slot in changed:
@@ -1327,8 +1330,24 @@ class Agent:
         if results:
             self._justify(inst, results)
         if any(p.o_supported and p not in results for p in inst.prefs):
-            for wme in self._backtrace(inst, level, through_o_support=False):
-                if wme not in goal.gds:
+            # The kernel extends the GDS when the o-supported WME enters working memory,
+            # so superstate WMEs that leave in that same phase are not part of it.
+            wmes = self._backtrace(inst, level, through_o_support=False)
+            if goal.gds:
+                self._pending_gds.append((goal, wmes))
+            else:  # a new GDS takes these WMEs at once (measured on the kernel)
+                for wme in wmes:
+                    goal.gds.add(wme)
+                    self._gds_index.setdefault(wme, set()).add(goal)
+
+    def _extend_gds(self) -> None:
+        pending, self._pending_gds = self._pending_gds, []
+        wm = self._wm
+        for goal, wmes in pending:
+            if not goal.alive:
+                continue
+            for wme in wmes:
+                if wm.get(wme.timetag) is wme and wme not in goal.gds:
                     goal.gds.add(wme)
                     self._gds_index.setdefault(wme, set()).add(goal)
 
