@@ -563,7 +563,7 @@ def observe_scene(scene: Scene, rng: np.random.Generator | int | None,
 
 # --------------------------------------------------------------------------- datasets
 
-DATASET_VERSION = "blocks-dataset-1"  # bump when generation, features or labels change
+DATASET_VERSION = "blocks-dataset-2"  # bump when generation, features or labels change
 KINDS = ("D1", "D2")
 _SPLITS = ("train", "test")
 
@@ -575,6 +575,9 @@ class BlockDataset:
     D1 (one sample per block): ``X`` = the 13 Table-1 features + the image id (14 columns).
     D2 (one sample per scene): ``X`` = 26 x 13 features, one row of 13 per block id (A first;
     zeros for blocks not in the scene), flattened, + the designated target's id (339 columns).
+    The D2 target is a graspable block with probability 1/2 and a blocked one otherwise (when
+    the scene has both kinds), so D2 labels are about balanced; D1 keeps the natural rates
+    (C1 mostly graspable, C2 one block per scene, C3 about a quarter to a third).
     ``logical``: the fusion column (eq. 2 over the plans of the sample's target); ``y``: 1 if
     the target is graspable now (true geometry), else 0. ``image``: the scene index of each
     sample (train scenes 0..S-1, test scenes numbered on from S). ``plans``: the sequences of
