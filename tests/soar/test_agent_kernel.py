@@ -209,3 +209,78 @@ def test_generated_agents_agree_with_kernel(seed: int, tmp_path) -> None:
     ours, our_trace = our_run(text, 15)
     assert ours == theirs
     assert _decision_lines(our_trace) == _decision_lines(their_trace)
+
+
+def generated_substate_agent(seed: int) -> str:
+    """A random agent whose top operator is worked out in substates: local o-supported
+    structure (goal dependency sets), results of either support, a third level."""
+    r = random.Random(seed)
+    lines = [f"indifferent-selection --{r.choice(['first', 'last'])}"]
+    lines += [
+        "sp {init (state <s> ^superstate nil -^count) --> (<s> ^operator <o> + >)"
+        " (<o> ^name init)}",
+        "sp {init*a (state <s> ^operator.name init) --> (<s> ^count 0 ^weather rain)}",
+        f"sp {{top*work (state <s> ^superstate nil ^count <c> < {r.randint(2, 5)})"
+        " --> (<s> ^operator <o> +) (<o> ^name work ^at <c>)}",
+        "sp {top*weather (state <s> ^superstate nil ^count <c> ^weather <w>)"
+        " --> (<s> ^wx (concat <w> <c>))}",
+    ]
+    if r.random() < 0.5:
+        pref = r.choice(["", "=", "<", ">"])
+        lines.append(
+            "sp {top*work2 (state <s> ^superstate nil ^count <c> < 3)"
+            f" --> (<s> ^operator <o> + {pref}) (<o> ^name work2)}}"
+        )
+    test = r.choice(["^superstate.operator.name work", "^superstate.operator <o>"])
+    lines.append(f"sp {{s*elab (state <s> {test}) --> (<s> ^local yes)}}")
+    lines.append(
+        "sp {s*p (state <s> ^local yes -^done) --> (<s> ^operator <o> +) (<o> ^name step)}"
+    )
+    kind = r.choice(["o-result", "i-result", "gds"])
+    if kind == "o-result":
+        lines.append(
+            "sp {s*a (state <s> ^operator.name step ^superstate <ss>) (<ss> ^count <c>)"
+            " --> (<ss> ^count <c> - (+ <c> 1)) (<s> ^done yes)}"
+        )
+    elif kind == "i-result":
+        lines += [
+            "sp {s*a (state <s> ^operator.name step) --> (<s> ^done yes)}",
+            "sp {s*res (state <s> ^done yes ^superstate <ss>) (<ss> ^count <c>)"
+            " --> (<ss> ^flag (+ <c> 100))}",
+            "sp {top*use (state <s> ^superstate nil ^flag <f> ^count <c>)"
+            " --> (<s> ^operator <o> + >) (<o> ^name bump)}",
+            "sp {top*bump (state <s> ^operator.name bump ^count <c>)"
+            " --> (<s> ^count <c> - (+ <c> 1))}",
+        ]
+    else:
+        lines += [
+            "sp {s*a (state <s> ^operator.name step ^superstate.wx <w>)"
+            " --> (<s> ^done yes ^saw <w>)}",
+            "sp {s*p2 (state <s> ^done yes -^finished) --> (<s> ^operator <o> +)"
+            " (<o> ^name finish)}",
+            "sp {s*a2 (state <s> ^operator.name finish ^superstate <ss>) (<ss> ^count <c>)"
+            " --> (<ss> ^count <c> - (+ <c> 1)) (<s> ^finished yes)}",
+        ]
+    if r.random() < 0.5:
+        lines += [
+            "sp {s*deep (state <s> ^superstate.superstate.operator.name work)"
+            " --> (<s> ^operator <o> +) (<o> ^name deep)}",
+            "sp {s*deep*a (state <s> ^operator.name deep ^superstate.superstate <top>)"
+            " (<top> ^count <c>) --> (<top> ^count <c> - (+ <c> 1))}",
+        ]
+    lines += [
+        "sp {tie (state <s> ^impasse tie ^superstate <ss> ^item <i>) (<i> ^name work)"
+        " --> (<ss> ^operator <i> >)}",
+        "sp {done (state <s> ^superstate nil ^count <c> >= 3)"
+        " --> (write |done | <c> (crlf)) (halt)}",
+    ]
+    return "\n".join(lines) + "\n"
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_generated_substate_agents_agree_with_kernel(seed: int, tmp_path) -> None:
+    text = generated_substate_agent(seed)
+    theirs, their_trace = kernel_run(text, 20, tmp_path)
+    ours, our_trace = our_run(text, 20)
+    assert ours == theirs
+    assert _decision_lines(our_trace) == _decision_lines(their_trace)
