@@ -60,8 +60,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         print("\ninterrupted", file=sys.stderr)
         return 130
     print()
-    if agent.halted:
-        print("System halted.")
     if args.stats:
         print(format_stats(agent))
     return 0

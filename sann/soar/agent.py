@@ -294,6 +294,8 @@ class Agent:
         self._emit(text)
 
     def request_halt(self) -> None:
+        if not self._halted and self.trace_level >= 1:
+            self._emit_line("System halted.\n")
         self._halted = True
         self._stop = True
 
@@ -581,7 +583,9 @@ class Agent:
         (each level's preferences asserted before the next level fires), then the active
         goal's retractions and those of removed goals, then the working-memory phase."""
         if self.trace_level >= 2 and goal is not None and self._phase == "apply":
-            self._emit(f"\t--- Firing Productions ({firing}) For State At Depth {goal.level} ---\n")
+            self._emit_line(
+                f"\t--- Firing Productions ({firing}) For State At Depth {goal.level} ---\n"
+            )
         if goal is None:
             if self.trace_level >= 3:
                 self._emit("\n--- Inner Elaboration Phase, active level 0 goal # ---\n")
@@ -599,12 +603,13 @@ class Agent:
             level_goal = level_goal.sub
         retractions, self._nil_retractions = self._nil_retractions, []
         if goal is not None:
-            retractions = goal.retractions + retractions
+            # Newest first, like the kernel's match-set lists.
+            retractions = goal.retractions[::-1] + retractions
             goal.retractions = []
         for inst in retractions:
             self._retract(inst)
         if self.trace_level >= 2 and goal is not None and self._phase == "apply":
-            self._emit(f"\t--- Change Working Memory ({firing}) ---\n")
+            self._emit_line(f"\t--- Change Working Memory ({firing}) ---\n")
         self._working_memory_phase()
         self._collect_changes()
 
@@ -673,6 +678,8 @@ class Agent:
         new, gone = self.matcher.take_changes()
         if len(new) > 1 and not in_match_order:
             new = sorted(new, key=self._creation_key)
+        if len(gone) > 1:
+            gone = sorted(gone, key=self._creation_key)
         for match in gone:
             inst = self._inst_of.pop(match, None)
             if inst is None:
@@ -752,7 +759,7 @@ class Agent:
         self._firings += 1
         info.firings += 1
         if self.trace_level >= 3:
-            self._emit(f"\nFiring {name}")
+            self._emit(f"\nFiring {name}\n")
         self._inst_of[match] = inst
         bindings = dict(match.bindings)  # type: ignore[attr-defined]
         operators = (
@@ -839,7 +846,7 @@ class Agent:
         for pref in inst.prefs:
             if pref.live and not pref.o_supported:
                 if not removed and self.trace_level >= 3:
-                    self._emit(f"\nRetracting {inst.name}")
+                    self._emit(f"\nRetracting {inst.name}\n")
                 removed = True
                 if self.trace_level >= 5:
                     self._emit("\n -" + trace_preference(pref))
@@ -1273,10 +1280,16 @@ class Agent:
         while goal is not None:
             if not self._decision_consistent(goal):
                 if self.trace_level >= 2 and (goal.sub is not None or goal.selected()):
-                    self._emit(
-                        f"\nRemoving substates of {goal.id} because the operator last selected"
-                        f" in {goal.id} is not\nconsistent with the current preferences."
+                    self._emit_line(
+                        f"Removing substates of {goal.id} because the operator last selected"
+                        f" in {goal.id} is not\nconsistent with the current preferences.\n"
                     )
+                    if self.trace_level >= 3:
+                        self._emit(
+                            f"\n       REMOVING CONTEXT SLOT: Slot Identifier [{goal.id}] and"
+                            " attribute [operator]\n\n          Decision for goal"
+                            f" [{goal.id}] is inconsistent.  Replacing it with....\n"
+                        )
                 self._remove_current_decision(goal)
                 return False
             if goal is limit:
@@ -1581,8 +1594,14 @@ class Agent:
     # ------------------------------------------------------------- output text
 
     def _emit(self, text: str) -> None:
-        stream = self.out if self.out is not None else sys.stdout
-        stream.write(text)
+        if text:
+            stream = self.out if self.out is not None else sys.stdout
+            stream.write(text)
+            self._line_start = text.endswith("\n")
+
+    def _emit_line(self, text: str) -> None:
+        """Trace text that starts on a fresh line, like the kernel's phase headers."""
+        self._emit(text if getattr(self, "_line_start", True) else "\n" + text)
 
     def __repr__(self) -> str:
         return f"<Agent {self.name}: {len(self._productions)} productions, {len(self._wm)} wmes>"
