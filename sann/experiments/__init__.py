@@ -1,0 +1,1 @@
+"""What `python -m sann reproduce ...` runs: the paper's experiments, end to end."""
