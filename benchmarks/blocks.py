@@ -33,6 +33,7 @@ from sann.tasks.blocks import (
 
 TARGET_SECONDS = 60.0
 GOAL_SECONDS = 30.0
+FULL_SAMPLES = 12_000  # the D1-C3 dataset of the paper: 10,000 train + 2,000 test
 
 
 def time_scene_generation(mode: str, n_samples: int, seed: int, params: BlockWorldParams
@@ -75,9 +76,11 @@ def dataset_benchmark(mode: str, n_train: int, n_test: int, seed: int,
         print(f"  make_dataset with {engine:8s}: {seconds:7.2f} s  "
               f"({n / seconds:7.0f} samples/s, {seconds / anchor:5.1f}x the anchor)")
     if "sann" in results:
-        verdict = ("goal met" if results["sann"] <= GOAL_SECONDS else
-                   "target met" if results["sann"] <= TARGET_SECONDS else "TARGET MISSED")
-        print(f"  ours: {results['sann']:.1f} s against the {TARGET_SECONDS:.0f} s target "
+        full = results["sann"] * FULL_SAMPLES / n
+        verdict = ("goal met" if full <= GOAL_SECONDS else
+                   "target met" if full <= TARGET_SECONDS else "TARGET MISSED")
+        scaled = "" if n == FULL_SAMPLES else f" (scaled to {FULL_SAMPLES} samples)"
+        print(f"  ours: {full:.1f} s{scaled} against the {TARGET_SECONDS:.0f} s target "
               f"(goal {GOAL_SECONDS:.0f} s): {verdict}")
     if "sann" in built and "soar_sml" in built:
         ratio = results["sann"] / results["soar_sml"]
