@@ -724,19 +724,15 @@ class Agent:
         ``(* ^attr value)``), then the later-loaded production first."""
         newest = 0
         index = -1
-        for i, wme in enumerate(match.wmes):  # type: ignore[attr-defined]
+        i = 0
+        for wme in match.wmes:  # type: ignore[attr-defined]
             if wme is not None and wme.timetag > newest:
                 newest, index = wme.timetag, i
-        production = match.production  # type: ignore[attr-defined]
-        info = self._productions.get(production.name)
-        mask = 0
-        if index >= 0:
-            cond = production.conditions[index]
-            if type(getattr(cond, "attr_test", None)) is Const:
-                mask |= 2
-            if type(getattr(cond, "value_test", None)) is Const:
-                mask |= 4
-        return (newest, mask, -(info.load_index if info is not None else 0))
+            i += 1
+        info = self._productions.get(match.production.name)  # type: ignore[attr-defined]
+        if info is None:
+            return (newest, 0, 0)
+        return (newest, info.cond_masks[index] if index >= 0 else 0, -info.load_index)
 
     def _schedule_retraction(self, inst: Instantiation) -> None:
         if inst.retracted:
@@ -761,7 +757,12 @@ class Agent:
         if self.trace_level >= 3:
             self._emit(f"\nFiring {name}\n")
         self._inst_of[match] = inst
-        bindings = dict(match.bindings)  # type: ignore[attr-defined]
+        bindings = match.bindings  # type: ignore[attr-defined]
+        binds = info.rhs_binds
+        if binds is None:
+            binds = info.rhs_binds = all(name in bindings for name in info.rhs_vars)
+        if not binds:
+            bindings = dict(bindings)  # new identifiers are bound for this firing only
         operators = (
             tested_operators(info, wmes, goal.id)
             if o_support and info.declared != "o-support"
@@ -790,15 +791,16 @@ class Agent:
         return inst
 
     def _value(self, value: object, bindings: dict[str, Symbol], inst: Instantiation) -> Symbol:
-        if isinstance(value, Var):
-            bound = bindings.get(value.name)
+        kind = type(value)
+        if kind is Var:
+            bound = bindings.get(value.name)  # type: ignore[attr-defined]
             if bound is None:
-                bound = self._new_id(value.name, inst.goal.level)
-                bindings[value.name] = bound
+                bound = self._new_id(value.name, inst.goal.level)  # type: ignore[attr-defined]
+                bindings[value.name] = bound  # type: ignore[attr-defined]
             return bound
-        if isinstance(value, Const):
-            return value.value
-        if isinstance(value, FuncCall):
+        if kind is Const:
+            return value.value  # type: ignore[attr-defined]
+        if kind is FuncCall:
             result = self._call(value, bindings, inst)
             if result is None:
                 raise SoarRuntimeError(f"({value.name}) returns no value")
@@ -823,8 +825,12 @@ class Agent:
         attr = action.attr
         attr = attr.value if type(attr) is Const else self._value(attr, bindings, inst)
         value = action.value
-        if type(value) is Const:
+        kind = type(value)
+        if kind is Const:
             value = value.value
+        elif kind is Var:
+            bound = bindings.get(value.name)
+            value = bound if bound is not None else self._value(value, bindings, inst)
         else:
             value = self._value(value, bindings, inst)
         referent = None
@@ -982,9 +988,11 @@ class Agent:
             if self._unlinked:
                 self._collect_unlinked()
             for slot in changed:
-                self._collect_garbage(slot)
+                if not slot.prefs and not slot.wmes:
+                    self._collect_garbage(slot)
             for slot in context:
-                self._collect_garbage(slot)
+                if not slot.prefs and not slot.wmes and not slot.acceptable_wmes:
+                    self._collect_garbage(slot)
 
     def _gds_violations(self, removes: list[WME]) -> bool:
         """Remove the substates whose goal dependency set holds a WME about to go, before

@@ -40,6 +40,14 @@ class ProductionInfo:
     firings: int = 0
     #: Order in which the production was loaded (a replaced production is loaded anew).
     load_index: int = 0
+    #: Per top-level condition: 2 if its attribute test is a constant, +4 if its value test
+    #: is; the kernel's alpha-memory order when one WME makes several matches.
+    cond_masks: tuple[int, ...] = ()
+    #: Variables used on the right-hand side; ``rhs_binds`` says, once the first match has
+    #: shown which variables the left-hand side binds, whether firing creates identifiers
+    #: (and so needs its own copy of the match's bindings).
+    rhs_vars: tuple[str, ...] = ()
+    rhs_binds: bool | None = None
 
     @classmethod
     def of(cls, production: Production) -> ProductionInfo:
@@ -60,7 +68,30 @@ class ProductionInfo:
                 if isinstance(a, MakeAction) and isinstance(a.id, Var)
             )
         )
-        return cls(production, tuple(indexes), production.support, production.actions, make_ids)
+        masks = tuple(
+            (2 if type(getattr(cond, "attr_test", None)) is Const else 0)
+            | (4 if type(getattr(cond, "value_test", None)) is Const else 0)
+            for cond in production.conditions
+        )
+        rhs_vars: dict[str, None] = {}
+        for action in production.actions:
+            values = (
+                (action.id, action.attr, action.value, action.referent)
+                if isinstance(action, MakeAction)
+                else (action.call,)
+            )
+            for value in values:
+                if value is not None:
+                    rhs_vars.update(dict.fromkeys(variables_in(value)))
+        return cls(
+            production,
+            tuple(indexes),
+            production.support,
+            production.actions,
+            make_ids,
+            cond_masks=masks,
+            rhs_vars=tuple(rhs_vars),
+        )
 
 
 class Instantiation:
