@@ -405,17 +405,19 @@ class Agent:
     # ------------------------------------------------------------- WM primitives
 
     def _add_wme(self, ident: Identifier, attr: Symbol, value: Symbol, acceptable=False) -> WME:
-        self._timetag += 1
-        wme = WME(ident, attr, value, self._timetag, acceptable)
-        self._wm[wme.timetag] = wme
+        timetag = self._timetag = self._timetag + 1
+        wme = WME(ident, attr, value, timetag, acceptable)
+        wm = self._wm
+        wm[timetag] = wme
         if type(value) is Identifier and value.level is None:
-            self._refs[value] = self._refs.get(value, 0) + 1
+            refs = self._refs
+            refs[value] = refs.get(value, 0) + 1
         if self._neg_watch:
             self._check_negations(wme)
         self.matcher.add_wme(wme)
         self._wme_adds += 1
-        if len(self._wm) > self._wm_max:
-            self._wm_max = len(self._wm)
+        if len(wm) > self._wm_max:
+            self._wm_max = len(wm)
         if self.trace_level >= 4:
             self._emit("\n=>WM: " + trace_wme(wme))
         return wme
@@ -905,10 +907,24 @@ class Agent:
         return slot
 
     def _add_preference(self, pref: Preference) -> None:
-        slot = self._slot(pref.id, pref.attr)
-        assert slot is not None
+        ident = pref.id
+        slots = self._slots.get(ident)
+        if slots is None:
+            slots = self._slots[ident] = {}
+        attr = pref.attr
+        key = attr if type(attr) is not float else (float, attr)
+        slot = slots.get(key)
+        if slot is None:
+            slot = slots[key] = Slot(ident, attr, False)
         slot.add(pref)
-        self._mark_changed(slot)
+        if slot.is_context:
+            self._context_changed_at(ident)
+            if not slot.changed:
+                slot.changed = True
+                self._changed_context.append(slot)
+        elif not slot.changed:
+            slot.changed = True
+            self._changed.append(slot)
 
     def _remove_preference(self, pref: Preference) -> None:
         slot = pref.slot
@@ -973,9 +989,14 @@ class Agent:
                     # a WME about to go is removed now; WMEs already decided still come
                     # and go in this phase, later slots see the substate gone.
                     self._gds_violations(removes[before:])
+            add_wme = self._add_wme
+            levels = self._level
             for slot, value in adds:
-                wme = slot.wmes[_vkey(value)] = self._add_wme(slot.id, slot.attr, value)
-                if self._level_of(slot.id) > 1:
+                ident = slot.id
+                wme = add_wme(ident, slot.attr, value)
+                slot.wmes[value if type(value) is not float else (float, value)] = wme
+                level = ident.level
+                if (level if level is not None else levels.get(ident, 1)) > 1:
                     self._remember_source(wme, slot, (ACCEPTABLE,))
             context, self._changed_context = self._changed_context, []
             for slot in reversed(context):
