@@ -777,7 +777,8 @@ class Agent:
                     pref = self._make_preference(action, bindings, inst)
                     if pref is None:
                         continue
-                    if o_support and not any(pref.id is o for o in operators):
+                    # Identifiers compare by identity, and never equal a constant.
+                    if o_support and pref.id not in operators:
                         pref.o_supported = True
                     prefs.append(pref)
                 else:
@@ -881,18 +882,22 @@ class Agent:
         re-add the same value in one firing: the new preference survives)."""
         justifications, self._new_justifications = self._new_justifications, []
         o_rejects: list[Preference] = []
-        fresh: set[int] = set()
+        added: list[Preference] = []
+        tracing = self.trace_level >= 5
+        add = self._add_preference
         for inst in [*justifications, *reversed(fired)]:
             for pref in reversed(inst.prefs):
-                if self.trace_level >= 5:
+                if tracing:
                     self._emit("\n+" + trace_preference(pref))
                 if pref.o_supported and pref.type == REJECT:
                     o_rejects.append(pref)
                     continue
-                fresh.add(id(pref))
-                self._add_preference(pref)
-        for pref in o_rejects:
-            self._o_reject(pref, fresh)
+                added.append(pref)
+                add(pref)
+        if o_rejects:
+            fresh = {id(pref) for pref in added}
+            for pref in o_rejects:
+                self._o_reject(pref, fresh)
 
     def _slot(self, ident: Identifier, attr: Symbol, create: bool = True) -> Slot | None:
         slots = self._slots.get(ident)

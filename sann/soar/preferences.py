@@ -138,7 +138,11 @@ class Slot:
         pref.live = False
 
     def all_preferences(self) -> list[Preference]:
-        return [p for t in PREFERENCE_TYPES for p in self.prefs.get(t, ())]
+        prefs = self.prefs
+        if len(prefs) == 1:  # the usual slot: one type, no need to walk all twelve
+            for bucket in prefs.values():
+                return list(bucket)
+        return [p for t in PREFERENCE_TYPES for p in prefs.get(t, ())]
 
     def is_empty(self) -> bool:
         return not self.prefs and not self.wmes and not self.acceptable_wmes
