@@ -39,7 +39,7 @@ def test_plans_hand_built_row(engine: str) -> None:
     assert plans == {
         "A": ["x:1:A", "y:1:A"],
         "B": ["x:3:DCB", "y:1:B"],  # along x C must go, and D sits on C
-        "C": ["x:3:BDC", "x:3:DBC", "y:2:DC"],  # two orders of B and D: a fork
+        "C": ["x:3:DBC", "y:2:DC"],  # D comes off first; then the pair is chosen
         "D": ["x:1:D", "y:1:D"],
         "E": ["x:1:E", "y:1:E"],
     }
@@ -73,10 +73,23 @@ def test_fork_budget_respects_cap() -> None:
         assert 1 <= len(plans) <= cap
         assert all(len(set(s.order)) == len(s.order) == s.t_o for s in plans)
     full = _texts(plan_scene(scene, targets=[24]))["X"]
-    # along x: E (on X), A and B in some order. Budget 4: A/B fork (2 each), then each
-    # branch forks between its two lowest candidates: E is never first.
-    assert full == ["x:4:ABEX", "x:4:AEBX", "x:4:BAEX", "x:4:BEAX",
-                    "y:4:CDEX", "y:4:CEDX", "y:4:DCEX", "y:4:DECX"]
+    # E (on X) comes off first; then along x A and B in either order, along y C and D
+    assert full == ["x:4:EABX", "x:4:EBAX", "y:4:ECDX", "y:4:EDCX"]
+    # X uncovered, four blockers around it: along x, A and B fork; along y, C and D
+    bare = scene_from_blocks([
+        ("X", 10, (50, 50, 5)), ("A", 5, (42.5, 50, 2.5)), ("B", 5, (57.5, 50, 2.5)),
+        ("C", 5, (50, 42.5, 2.5)), ("D", 5, (50, 57.5, 2.5)),
+    ])
+    assert _texts(plan_scene(bare, targets=[24]))["X"] == [
+        "x:3:ABX", "x:3:BAX", "y:3:CDX", "y:3:DCX"]
+    # three blockers on one pair: budget 4 = A first (2) or B first (2), then each branch
+    # forks between its two lowest candidates: C is never first
+    row = scene_from_blocks([
+        ("X", 10, (50, 50, 5)), ("A", 5, (42.5, 46.5, 2.5)), ("B", 5, (42.5, 53.5, 2.5)),
+        ("C", 5, (57.5, 50, 2.5)),
+    ])
+    assert _texts(plan_scene(row, targets=[24]))["X"] == [
+        "x:4:ABCX", "x:4:ACBX", "x:4:BACX", "x:4:BCAX", "y:1:X"]
 
 
 def test_targets_per_run_does_not_change_plans() -> None:
