@@ -762,7 +762,7 @@ class Agent:
         bindings = match.bindings  # type: ignore[attr-defined]
         binds = info.rhs_binds
         if binds is None:
-            binds = info.rhs_binds = all(name in bindings for name in info.rhs_vars)
+            binds = info.rhs_binds = all(var in bindings for var in info.rhs_vars)
         if not binds:
             bindings = dict(bindings)  # new identifiers are bound for this firing only
         operators = (
@@ -771,7 +771,17 @@ class Agent:
             else []
         )
         prefs = inst.prefs
-        for action in info.actions:
+        for action, plan in zip(info.actions, info.plans, strict=True):
+            if plan is not None:
+                # (<id> ^attr value) with both already bound: no evaluation needed.
+                ident = bindings.get(plan[0])
+                value = plan[3] if plan[2] else bindings.get(plan[3])  # type: ignore[arg-type]
+                if type(ident) is Identifier and value is not None:
+                    pref = Preference(plan[4], ident, plan[1], value, None, inst)
+                    if o_support and ident not in operators:
+                        pref.o_supported = True
+                    prefs.append(pref)
+                    continue
             try:
                 if type(action) is MakeAction:
                     pref = self._make_preference(action, bindings, inst)

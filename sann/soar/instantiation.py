@@ -48,6 +48,10 @@ class ProductionInfo:
     #: (and so needs its own copy of the match's bindings).
     rhs_vars: tuple[str, ...] = ()
     rhs_binds: bool | None = None
+    #: Per action, the common make-action shape ``(<id> ^const value)`` without referent as
+    #: ``(id name, attr, value is a constant, constant or variable name, preference)`` so
+    #: firing can skip the general evaluator; ``None`` for any other action.
+    plans: tuple[tuple[str, object, bool, object, str] | None, ...] = ()
 
     @classmethod
     def of(cls, production: Production) -> ProductionInfo:
@@ -91,7 +95,22 @@ class ProductionInfo:
             make_ids,
             cond_masks=masks,
             rhs_vars=tuple(rhs_vars),
+            plans=tuple(_action_plan(action) for action in production.actions),
         )
+
+
+def _action_plan(action: MakeAction | CallAction) -> tuple[str, object, bool, object, str] | None:
+    """The fast firing form of a make-action with a constant attribute (see ``plans``)."""
+    if type(action) is not MakeAction or action.referent is not None:
+        return None
+    if type(action.id) is not Var or type(action.attr) is not Const:
+        return None
+    value = action.value
+    if type(value) is Const:
+        return (action.id.name, action.attr.value, True, value.value, action.preference)
+    if type(value) is Var:
+        return (action.id.name, action.attr.value, False, value.name, action.preference)
+    return None
 
 
 class Instantiation:
