@@ -40,6 +40,7 @@ from sann.soar.production import (
     ConjunctiveNegation,
     Const,
     Disjunction,
+    MakeAction,
     Production,
     Relational,
     Test,
@@ -1043,7 +1044,8 @@ class _ProductionNode(_Node):
 
     def forget(self, tok: _Token) -> None:
         del self.tokens[tok]
-        self.changes.retract(tok[5])
+        if tok[5] is not None:  # None: the match moved to a rebuilt network (Rete._rebuild)
+            self.changes.retract(tok[5])
 
 
 class _Layout:
@@ -1292,7 +1294,8 @@ def _choose_index(plan: _Plan) -> None:
     plan.index = (best[2][1], best[0][1])  # type: ignore[assignment]
 
 
-def _join_cost(cond: Condition, bound: set[str], singletons: set[str]) -> int:
+def _join_cost(cond: Condition, bound: set[str], singletons: set[str],
+               volatile: set[object]) -> int:
     """Estimated fan-out class, cheapest first:
 
     0. a check or a constant test (attribute and value fixed);
@@ -1301,10 +1304,12 @@ def _join_cost(cond: Condition, bound: set[str], singletons: set[str]) -> int:
     2. a constant attribute with a new value (all the values of a multi-valued attribute);
     3. the same, with a relational test waiting for a variable bound later (cannot prune);
     4. a variable attribute;
-    5. an existence test (``(<s> ^step)``: its value is used nowhere else).  Existence tests
-       go last because a flag like ``^step`` changes often, and every change of a
-       condition rebuilds all the tokens below it.
+    5. an existence test (``(<s> ^step)``: its value is used nowhere else), or a check of a
+       volatile attribute (one that rules remove, like ``^last-moved``, and ``^operator``).
+       They go last, the classic advice for Rete rules: every change of a WME a condition
+       matches rebuilds all the tokens below that condition.
     """
+    late = isinstance(cond.attr_test, Const) and cond.attr_test.value in volatile
 
     def fixed(test: Test) -> bool:  # binds nothing new: a constant, a check or a filter
         return set(equality_vars(test)) <= bound
@@ -1316,14 +1321,25 @@ def _join_cost(cond: Condition, bound: set[str], singletons: set[str]) -> int:
         if values and values <= bound:
             return 1
         if not values:
-            return 0
+            return 5 if late else 0
     elif fixed(cond.value_test):
-        return 0
+        return 5 if late else 0
     if values - bound and values - bound <= singletons:
         return 5
     own = set().union(*(equality_vars(t) for t in _fields(cond)))
     pending = set().union(*(relational_vars(t) for t in _fields(cond))) - bound - own
     return 3 if pending else 2
+
+
+def _const_attributes(elements: tuple[ConditionElement, ...]) -> set[object]:
+    """The constant attributes tested anywhere in ``elements`` (nested negations too)."""
+    found: set[object] = set()
+    for element in elements:
+        if isinstance(element, ConjunctiveNegation):
+            found |= _const_attributes(element.conditions)
+        elif isinstance(element.attr_test, Const):
+            found.add(element.attr_test.value)
+    return found
 
 
 def _variables_of(item: object) -> Iterator[str]:
@@ -1347,7 +1363,7 @@ def _singletons(production: Production) -> set[str]:
 
 
 def _join_order(elements: tuple[ConditionElement, ...], bound: dict[str, int], scope: set[str],
-                singletons: set[str]) -> list[int]:
+                singletons: set[str], volatile: set[object]) -> list[int]:
     """Most constrained first, keeping linkage: a positive condition joins on an identifier
     already bound, or on its value when that is a bound variable and the attribute a constant
     (a hashed "reverse" join: ``(<b> ^name <n>)`` with ``<n>`` bound finds the one block
@@ -1396,7 +1412,7 @@ def _join_order(elements: tuple[ConditionElement, ...], bound: dict[str, int], s
         linked = [i for i in positives if age.keys() & set(equality_vars(elements[i].id_test))
                   or value_linked(elements[i])]
         pool = linked or [i for i in positives if elements[i].goal is not None] or positives
-        place(min(pool, key=lambda i: (_join_cost(elements[i], set(age), singletons),
+        place(min(pool, key=lambda i: (_join_cost(elements[i], set(age), singletons, volatile),
                                        -recency(elements[i]), i)))
     return order
 
@@ -1419,6 +1435,10 @@ class Rete:
         self._root_token = _Token((None, None, (), self._root, None, None))
         self._root.tokens[self._root_token] = None
         self._pnodes: dict[str, _ProductionNode] = {}
+        self._productions: dict[str, Production] = {}  # in the order added
+        self._pending: list[Production] = []  # added, network not built yet (see _flush)
+        self._volatile: set[object] = {"operator"}  # attributes rules remove
+        self._stale: set[str] = set()  # built before an attribute they check became volatile
         self._amems: dict[tuple, _AlphaMemory] = {}
         self._alpha_index: dict[tuple, list[_AlphaMemory]] = {}
         self._alpha_cache: dict[tuple, list[_AlphaMemory]] = {}
@@ -1429,10 +1449,55 @@ class Rete:
     # ----- public interface -----
 
     def add_production(self, production: Production) -> None:
-        if production.name in self._pnodes:
+        if production.name in self._productions:
             raise SoarSemanticError(production.name, "a production with this name exists",
                                     production.location)
         check_production(production, links=self.check_links)
+        self._productions[production.name] = production
+        self._pending.append(production)
+        for action in production.actions:
+            if (isinstance(action, MakeAction) and action.preference == "-"
+                    and isinstance(action.attr, Const)
+                    and action.attr.value not in self._volatile):
+                attr = action.attr.value
+                self._volatile.add(attr)
+                self._stale.update(name for name, pnode in self._pnodes.items()
+                                   if attr in _const_attributes(pnode.production.conditions))
+
+    def _flush(self) -> None:
+        """Build the productions added since the last change of working memory or query.
+
+        Deferring the build lets the join order see the rules added together: which
+        attributes the rules remove (volatile) is known only then.  A production built
+        before one of its checked attributes turned out volatile is rebuilt, keeping its
+        Match objects.  Matches still appear in the next take_changes(), as promised."""
+        stale, self._stale = self._stale, set()
+        for name in stale:
+            if name in self._pnodes:
+                self._rebuild(self._pnodes[name])
+        pending, self._pending = self._pending, []
+        for production in pending:
+            self._build(production)
+
+    def _rebuild(self, old: _ProductionNode) -> None:
+        """Rebuild a production with the current join order; its live matches keep their
+        identity (same WMEs, same Match object), so no change is reported for them."""
+        live = {tuple(map(id, tok[5].wmes)): tok for tok in old.tokens}
+        added = self._changes.added
+        new = self._build(old.production)
+        for tok in new.tokens:
+            match = tok[5]
+            previous = live.pop(tuple(map(id, match.wmes)), None)
+            if previous is None:
+                continue
+            kept = previous[5]
+            previous[5] = None  # its old token leaves without retracting it
+            added.pop(match, None)
+            kept._token, kept._layout = match._token, match._layout
+            tok[5] = kept
+        self._remove_node(old)
+
+    def _build(self, production: Production) -> _ProductionNode:
         conditions = production.conditions
         scope = _bound_by(conditions)
         var_pos: dict[str, int] = {}
@@ -1444,14 +1509,20 @@ class Rete:
         self._pnodes[production.name] = pnode
         for tok in list(bottom.tokens):
             pnode.left_activate(tok)
+        return pnode
 
     def excise(self, name: str) -> None:
+        if self._pending:
+            self._flush()
         pnode = self._pnodes.pop(name, None)
         if pnode is None:
             raise KeyError(f"no production named {name!r}")
+        del self._productions[name]
         self._remove_node(pnode)
 
     def add_wme(self, wme: WME) -> None:
+        if self._pending:
+            self._flush()
         if wme in self._wme_info:
             raise ValueError(f"{wme!r} is already in working memory")
         amems: list[_AlphaMemory] = []
@@ -1465,6 +1536,8 @@ class Rete:
                     node.right_activate(wme)
 
     def remove_wme(self, wme: WME) -> None:
+        if self._pending:
+            self._flush()
         info = self._wme_info.pop(wme, None)
         if info is None:
             raise ValueError(f"{wme!r} is not in working memory")
@@ -1487,16 +1560,20 @@ class Rete:
                         node.unblock(tok)
 
     def take_changes(self) -> tuple[list[Match], list[Match]]:
+        if self._pending:
+            self._flush()
         return self._changes.take()
 
     def matches(self, name: str) -> list[Match]:
+        if self._pending:
+            self._flush()
         pnode = self._pnodes.get(name)
         if pnode is None:
             raise KeyError(f"no production named {name!r}")
         return [tok[5] for tok in pnode.tokens]
 
     def productions(self) -> list[Production]:
-        return [pnode.production for pnode in self._pnodes.values()]
+        return list(self._productions.values())
 
     # ----- alpha network -----
 
@@ -1561,7 +1638,7 @@ class Rete:
     def _build_scope(self, elements: tuple[ConditionElement, ...], parent: _Node,
                      var_pos: dict[str, int], nvals: int, scope: set[str],
                      singletons: set[str], states: set[str]) -> tuple[_Node, list[int]]:
-        order = _join_order(elements, var_pos, scope, singletons)
+        order = _join_order(elements, var_pos, scope, singletons, self._volatile)
         deferred: list[tuple[int, str, str]] = []
         node = parent
         for index in order:

@@ -399,11 +399,13 @@ def test_shared_prefix_and_alpha_memories() -> None:
     rete = Rete()
     rete.add_production(parse_production(
         "sp {one (state <s> ^name go ^block <b>) (<b> ^on table) --> (write x)}"))
+    rete.take_changes()  # builds the network of the productions added so far
     alone = _node_count(rete)
     amems = len(rete._amems)
     rete.add_production(parse_production(
         "sp {two (state <s> ^name go ^block <b>) (<b> ^on table) (<b> ^color red) --> "
         "(write x)}"))
+    rete.take_changes()
     assert _node_count(rete) == alone + 2  # one join and one production node
     assert len(rete._amems) == amems + 1
     rete.excise("two")
@@ -461,3 +463,46 @@ def test_productions_built_from_dataclasses() -> None:
     rete.add_production(production)
     rete.add_wme(WME(s1, "a", 1, 1))
     assert [m.bindings for m in rete.matches("p")] == [{"s": s1, "x": 1}]
+
+
+def test_volatile_checks_join_last() -> None:
+    """A check of an attribute that some rule removes is joined after the stable ones, so
+    that its changes rebuild few tokens; the order does not change the matches."""
+    rete = Rete()
+    rete.add_production(parse_production(
+        "sp {use (state <s> ^flag on ^name go ^block <b>) (<b> ^size 1) --> (write x)}"))
+    rete.add_production(parse_production(
+        "sp {flip (state <s> ^flag on) --> (<s> ^flag on - off)}"))
+    s1, block = Identifier("S", 1, level=1), Identifier("B", 1)
+    flag = WME(s1, "flag", "on", 1)
+    for wme in (flag, WME(s1, "name", "go", 2), WME(s1, "block", block, 3),
+                WME(block, "size", 1, 4)):
+        rete.add_wme(wme)
+    (match,) = rete.matches("use")
+    assert match.wmes[0] is flag
+    pnode = rete._pnodes["use"]
+    assert pnode.layout.order[-1] == 0  # the ^flag check is the last join
+    rete.remove_wme(flag)
+    assert rete.matches("use") == []
+
+
+def test_rebuild_after_an_attribute_turns_volatile_keeps_matches() -> None:
+    rete = Rete()
+    s1, block = Identifier("S", 1, level=1), Identifier("B", 1)
+    for wme in (WME(s1, "flag", "on", 1), WME(s1, "block", block, 2), WME(block, "size", 1, 3)):
+        rete.add_wme(wme)
+    rete.add_production(parse_production(
+        "sp {use (state <s> ^flag on ^block <b>) (<b> ^size 1) --> (write x)}"))
+    (match,) = rete.take_changes()[0]
+    assert rete._pnodes["use"].layout.order[0] == 0  # ^flag is not known to change yet
+    rete.add_production(parse_production(
+        "sp {flip (state <s> ^flag on) --> (<s> ^flag on - off)}"))
+    added, removed = rete.take_changes()
+    assert removed == [] and [m.production.name for m in added] == ["flip"]
+    assert rete._pnodes["use"].layout.order[-1] == 0  # rebuilt: ^flag joins last
+    assert rete.matches("use") == [match]
+    assert match.bindings == {"s": s1, "b": block}
+    (flip,) = rete.matches("flip")
+    rete.remove_wme(next(iter(rete._wme_info)))  # the ^flag WME goes: both matches retract
+    assert sorted(rete.take_changes()[1], key=id) == sorted([match, flip], key=id)
+    assert rete.matches("use") == []
