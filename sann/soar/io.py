@@ -22,6 +22,8 @@ InputValue = Union[str, int, float, "InputHandle"]
 class WMEHandle:
     """One input WME ``(id ^attr value)``; ``remove()`` takes it out at the next input phase."""
 
+    __slots__ = ("_agent", "id", "attr", "value", "wme", "removed")
+
     def __init__(self, agent: Agent, ident: Identifier, attr: str, value: Symbol) -> None:
         self._agent = agent
         self.id = ident
@@ -63,6 +65,9 @@ class InputHandle:
         self._check_live()
         if not isinstance(attr, str) or not attr:
             raise SoarRuntimeError(f"input attribute must be a non-empty string, got {attr!r}")
+        kind = type(value)
+        if kind is str or kind is int or kind is float:  # the common case, checked first
+            return self._queue(attr, value)  # type: ignore[arg-type]
         if value is _MISSING:
             ident = self._agent._new_id(attr, 1)
             link = self._queue(attr, ident)
@@ -112,9 +117,10 @@ class InputHandle:
             sub._clear()
 
     def _queue(self, attr: str, value: Symbol) -> WMEHandle:
-        handle = WMEHandle(self._agent, self.identifier, attr, value)
+        agent = self._agent
+        handle = WMEHandle(agent, self.identifier, attr, value)
         self._children.append(handle)
-        self._agent._queue_input(("add", handle, self.identifier, attr, value))
+        agent._input_ops.append(("add", handle, self.identifier, attr, value))
         return handle
 
     def _check_live(self) -> None:
