@@ -8,7 +8,6 @@ identity; their printed name is a letter and a number as in Soar (S1, I2, O3).
 from __future__ import annotations
 
 from collections import defaultdict
-from typing import Union
 
 
 class Identifier:
@@ -36,7 +35,7 @@ class Identifier:
     __str__ = __repr__
 
 
-Symbol = Union[Identifier, str, int, float]
+Symbol = Identifier | str | int | float
 
 
 class IdentifierFactory:
@@ -73,7 +72,8 @@ class WME:
 
     def __repr__(self) -> str:
         plus = " +" if self.acceptable else ""
-        return f"({self.timetag}: {self.id} ^{format_symbol(self.attr)} {format_symbol(self.value)}{plus})"
+        attr, value = format_symbol(self.attr), format_symbol(self.value)
+        return f"({self.timetag}: {self.id} ^{attr} {value}{plus})"
 
 
 def format_symbol(value: Symbol) -> str:
