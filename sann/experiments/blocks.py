@@ -91,7 +91,8 @@ def run(out: str | Path, config: BlocksExperiment = BlocksExperiment(),
     for kind in KINDS:
         for mode in MODES:
             data = make_dataset(kind, mode, n_train=config.n_train, n_test=config.n_test,
-                                seed=config.data_seed, progress=progress)
+                                seed=config.data_seed, progress=progress,
+                                workers=None)
             runs = [train_pair(data, config, seed) for seed in range(config.seeds)]
             results["datasets"].setdefault(kind, {})[mode] = _jsonable(data.meta)
             results["accuracy"].setdefault(kind, {})[mode] = {
