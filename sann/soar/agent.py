@@ -225,8 +225,7 @@ class Agent:
 
         The matcher is kept (only its working memory is emptied), as the kernel keeps its
         Rete, so re-initialising between problems costs the WMEs, not the rules."""
-        for wme in list(self._wm.values()):
-            self.matcher.remove_wme(wme)
+        self.matcher.clear_wmes()
         self.matcher.take_changes()
         for info in self._productions.values():
             info.firings = 0

@@ -498,6 +498,11 @@ class BruteForceMatcher:
         del self._wmes[wme]
         self._dirty = True
 
+    def clear_wmes(self) -> None:
+        """Remove every WME at once (same changes as ``remove_wme`` on each)."""
+        self._wmes.clear()
+        self._dirty = True
+
     def take_changes(self) -> tuple[list[Match], list[Match]]:
         self._refresh()
         return self._changes.take()
@@ -1558,6 +1563,43 @@ class Rete:
                     del blockers[wme]
                     if not blockers:
                         node.unblock(tok)
+
+    def clear_wmes(self) -> None:
+        """Remove every WME at once: the same changes as ``remove_wme`` on each (every live
+        match is retracted), but the memories are emptied in place instead of deleting the
+        tokens one by one, so ``init-soar`` costs the size of the network, not the joins."""
+        if self._pending:
+            self._flush()
+        for pnode in self._pnodes.values():
+            for tok in pnode.tokens:
+                if tok[5] is not None:
+                    self._changes.retract(tok[5])
+        self._wme_info.clear()
+        for amem in self._amems.values():
+            amem.wmes.clear()
+            for index in amem.indexes.values():
+                index.clear()  # cleared in place: the join nodes hold these very dicts
+        self._clear_memories(self._root)
+        self._root_token[4] = None
+        for child in self._root.children:  # a node needing no WME gets its token back
+            child.left_activate(self._root_token)
+
+    def _clear_memories(self, top: _Node) -> None:
+        """Empty the token memories of every node below ``top`` (in place)."""
+        stack = list(top.children)
+        while stack:
+            node = stack.pop()
+            stack.extend(node.children)
+            node.tokens.clear()
+            for index in node.indexes.values():
+                index.clear()
+            if isinstance(node, _NegativeNode):
+                node.every.clear()
+                node.every_index.clear()
+            elif isinstance(node, _NCCNode):
+                node.owners.clear()
+            elif isinstance(node, _PartnerNode):
+                node.buffer.clear()
 
     def take_changes(self) -> tuple[list[Match], list[Match]]:
         if self._pending:

@@ -292,6 +292,39 @@ def test_transient_match_is_reported_neither_way(world: World) -> None:
     assert world.m.take_changes() == ([], [])
 
 
+def _fill_blocks(world: World) -> list[WME]:
+    a, b, c = world.new(), world.new(), world.new()
+    made = [world.add(world.s1, "block", block) for block in (a, b, c)]
+    made += [world.add(a, "on", b), world.add(b, "on", c), world.add(a, "color", "red")]
+    return made
+
+
+def test_clear_wmes_retracts_everything_and_the_network_still_matches(world: World) -> None:
+    rules = {
+        "on": "(state <s> ^block <x>) (<x> ^on <y>)",
+        "bare": "(state <s> ^block <x>) -(<x> ^on <y>)",
+        "free": "(state <s> ^block <x>) -{(<s> ^block <y>) (<y> ^on <x>) (<y> ^color red)}",
+    }
+    for name, text in rules.items():
+        world.rule(text, name)
+    _fill_blocks(world)
+    world.m.take_changes()
+    live = {id(m) for name in rules for m in world.m.matches(name)}
+    world.m.clear_wmes()
+    added, removed = world.m.take_changes()
+    assert added == [] and {id(m) for m in removed} == live
+    assert all(world.m.matches(name) == [] for name in rules)
+    made = _fill_blocks(world)  # new identifiers: the memories must hold no stale token
+    fresh = BruteForceMatcher()
+    for name, text in rules.items():
+        fresh.add_production(parse_production(f"sp {{{name} {text} --> (write |x|)}}"))
+    for wme in made:
+        fresh.add_wme(wme)
+    for name in rules:
+        assert world.bindings(name) == sorted((m.bindings for m in fresh.matches(name)), key=repr)
+    assert len(world.m.matches("on")) == 2 and len(world.m.matches("free")) == 2
+
+
 def test_wmes_follow_written_order_with_none_for_negations(world: World) -> None:
     block = world.new()
     world.rule("(state <s> ^name go) -(<s> ^stop yes) (<s> ^block <b>) -{(<b> ^x 1)}")
