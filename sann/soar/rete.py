@@ -1585,12 +1585,15 @@ class Rete:
             child.left_activate(self._root_token)
 
     def _clear_memories(self, top: _Node) -> None:
-        """Empty the token memories of every node below ``top`` (in place)."""
+        """Empty the token memories of every node below ``top`` (in place).  A node passes
+        on only its active tokens, so the children of a node without any hold none either:
+        the walk costs the live part of the network."""
         stack = list(top.children)
         while stack:
             node = stack.pop()
-            stack.extend(node.children)
-            node.tokens.clear()
+            if node.tokens:
+                stack.extend(node.children)
+                node.tokens.clear()
             for index in node.indexes.values():
                 index.clear()
             if isinstance(node, _NegativeNode):
