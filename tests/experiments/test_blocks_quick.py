@@ -19,10 +19,11 @@ def test_reproduce_blocks_quick_writes_results_and_figures(tmp_path, capsys):
                 summary = cell[net]
                 assert len(summary["seeds"]) == 2
                 assert summary["ci95"][0] <= summary["mean"] <= summary["ci95"][1]
-                assert 0.5 < summary["mean"] <= 1.0
+                assert 0.0 <= summary["mean"] <= 1.0
                 curves = results["test_error"][kind][mode][net]
                 assert len(curves) == 2 and len(curves[0]) == results["config"]["train"]["epochs"]
             assert results["datasets"][kind][mode]["rules_sha256"]
+            assert cell["sann"]["mean"] > 0.75, (kind, mode, cell)
     for name in ("fig8_test_error_D1_C3", "fig9a_accuracy_D1", "fig9b_accuracy_D2",
                  "fig13_tsne_input", "fig14_tsne_hidden"):
         assert (tmp_path / f"{name}.png").stat().st_size > 10_000
