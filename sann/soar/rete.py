@@ -615,7 +615,8 @@ class _AlphaMemory:
     """The WMEs that pass one condition's constant tests, with hash indices on the fields
     the join nodes below test."""
 
-    __slots__ = ("key", "lookup", "accept", "wmes", "indexes", "index_list", "successors")
+    __slots__ = ("key", "lookup", "accept", "wmes", "indexes", "index_list", "successors",
+                 "activations")
 
     def __init__(self, key: tuple, lookup: tuple, accept: Callable[[WME], bool] | None) -> None:
         self.key = key
@@ -625,6 +626,24 @@ class _AlphaMemory:
         self.indexes: dict[str, dict] = {}
         self.index_list: list[tuple[Callable, dict]] = []
         self.successors: list[_Node] = []
+        # (right_activate, parent memory) per successor: a node whose parent memory is empty
+        # has nothing to join with, so add_wme skips the call (Doorenbos's right unlinking,
+        # as a test instead of a relink).
+        self.activations: list[tuple[Callable[[WME], None], dict]] = []
+
+    def link(self, node: _Node) -> None:
+        """Add a successor in front: nodes are built top-down, and a descendant must be
+        right-activated before its ancestor or a WME joining both makes a token twice."""
+        self.successors.insert(0, node)
+        self._relink()
+
+    def unlink(self, node: _Node) -> None:
+        self.successors.remove(node)
+        self._relink()
+
+    def _relink(self) -> None:
+        self.activations = [(node.right_activate, node.parent.tokens)  # type: ignore[union-attr]
+                            for node in self.successors]
 
     def index(self, field: str) -> dict:
         index = self.indexes.get(field)
@@ -1537,8 +1556,9 @@ class Rete:
             if accept is None or accept(wme):
                 amem.add(wme)
                 amems.append(amem)
-                for node in amem.successors:
-                    node.right_activate(wme)
+                for right_activate, parent_tokens in amem.activations:
+                    if parent_tokens:
+                        right_activate(wme)
 
     def remove_wme(self, wme: WME) -> None:
         if self._pending:
@@ -1718,7 +1738,7 @@ class Rete:
         node = make(parent, key)
         parent.children.append(node)
         parent.child_map[key] = node
-        amem.successors.insert(0, node)  # descendants before ancestors: no duplicate tokens
+        amem.link(node)
         for tok in list(parent.tokens):
             node.left_activate(tok)
         return node
@@ -1762,7 +1782,7 @@ class Rete:
         node.parent = None  # marks it removed
         amem = getattr(node, "amem", None)
         if amem is not None:
-            amem.successors.remove(node)
+            amem.unlink(node)
             if not amem.successors:
                 self._drop_alpha_memory(amem)
         if isinstance(node, _NCCNode):
