@@ -30,6 +30,10 @@ width ``gripper_finger_width`` beside both faces of that pair (their extent alon
 shrunk by ``finger_margin`` at each edge: the finger pad) are free of other blocks over the
 block's height range (the fingers close on the faces; a block hanging over a slab higher up,
 e.g. the overhang of a 10-block on a neighbouring stack, is taken to be reached under).
+The fingers need ``gripper_finger_width`` = 4 units, twice the sensor's ``neighbour_gap`` (2):
+a side block 2 to 4 units away blocks the grasp but is absent from the block's own features,
+so a per-block network cannot see it, while the rules, which see the whole scene's observed
+geometry, can (see BlockWorldParams and the header of rules/blocks.soar).
 
 Features (Table 1 of the paper, in this column order): X, Y, Z (observed centre), Distance
 (from the observed centre to the robot base, clipped to 130), Size, Color, Target (the block's
@@ -76,30 +80,40 @@ _EPS = 1e-6
 class BlockWorldParams:
     """Every tunable constant of the block world, in one place.
 
-    ``gripper_finger_width``: the free space a finger needs beside a face (units of the table).
+    The gripper needs more room than the sensor reports. ``gripper_finger_width`` (4) is the
+    free width a finger needs beside a face (finger width plus margin, units of the table);
+    ``neighbour_gap`` (2) is the gap below which the sensor lists a side neighbour in the
+    Table-1 features. A block whose nearest side block stands 2 to 4 units away therefore has
+    neighbour feature 0 on that side and yet cannot be grasped along that axis: its own 13
+    features do not carry the blockage (they hold no other block's position), while the Soar
+    rules, which see every block's observed box, derive it from the geometry (gap between faces
+    below the clearance, overlapping along the face and in height; rules/blocks.soar). This is
+    what lets the scene-level reasoning beat a per-block network (paper Fig. 9a, D1).
+
     ``finger_margin``: a finger's pad covers its face except this much at each side edge, so a
     block that overlaps the finger's slab by less than the margin (a corner grazing it) does not
     stop it.
-    ``neighbour_gap``: a face closer than this to another block's face makes it a neighbour
-    feature; equal to the finger width, so the Left..Back features mean "a finger does not fit
-    here" up to sensor noise. ``sensor_noise``: standard deviation of the Gaussian noise on each
-    observed centre coordinate. ``overlap_eps``: two blocks must overlap by more than this in
-    the other two axes to be neighbours (so noise does not make a block on the next level a side
-    neighbour). ``touch_prob``: probability that a C1 block, or a C3 stack base, is placed
-    against an earlier one. ``near_gap_prob``: probability that such a placement leaves a
-    small gap (uniform in [0, 2 x finger width)) instead of touching exactly. ``stack_jitter``:
-    the largest offset of a block on a support of its own size or smaller.
+    ``neighbour_gap``: a face closer than this to another block's face makes it a neighbour feature;
+    half the finger width, so a Left..Back feature means "a finger does not fit here" (up to sensor
+    noise) but feature 0 does not mean it fits. ``sensor_noise``: standard deviation of the Gaussian
+    noise on each observed centre coordinate. ``overlap_eps``: two blocks must overlap by more than
+    this in the other two axes to be neighbours (so noise does not make a block on the next level a
+    side neighbour). ``touch_prob``: probability that a C1 block, or a C3 stack base, is placed
+    against an earlier one. ``near_gap_prob``: probability that such a placement leaves a small gap
+    (uniform in [0, 1.5 x finger width), so a third of them are the hidden blockages between
+    ``neighbour_gap`` and the finger width, a third are free) instead of touching exactly.
+    ``stack_jitter``: the largest offset of a block on a support of its own size or smaller.
     ``min_blocks``/``max_blocks``: the number of blocks of a dataset scene is uniform in this
     range.
     """
 
-    gripper_finger_width: float = 2.0
+    gripper_finger_width: float = 4.0
     finger_margin: float = 1.0
     neighbour_gap: float = 2.0
     sensor_noise: float = 0.2
     overlap_eps: float = 1.0
     touch_prob: float = 0.35
-    near_gap_prob: float = 0.3
+    near_gap_prob: float = 0.7
     stack_jitter: float = 1.0
     min_blocks: int = 2
     max_blocks: int = MAX_BLOCKS
@@ -294,7 +308,7 @@ class _Builder:
         p = self.params
         gap = 0.0
         if self.rng.random() < p.near_gap_prob:
-            gap = self.rng.uniform(0.0, 2.0 * p.gripper_finger_width)
+            gap = self.rng.uniform(0.0, 1.5 * p.gripper_finger_width)
         axis, sign = int(self.rng.integers(2)), (-1.0, 1.0)[int(self.rng.integers(2))]
         cj, sj = self.centre[j], self.size[j]
         slack = max(0.0, (sj + size) / 2 - 2.0)  # keep >= 2 units of face contact
@@ -563,7 +577,7 @@ def observe_scene(scene: Scene, rng: np.random.Generator | int | None,
 
 # --------------------------------------------------------------------------- datasets
 
-DATASET_VERSION = "blocks-dataset-2"  # bump when generation, features or labels change
+DATASET_VERSION = "blocks-dataset-3"  # bump when generation, features or labels change
 KINDS = ("D1", "D2")
 _SPLITS = ("train", "test")
 
@@ -813,7 +827,9 @@ def make_dataset(
         raise ValueError(f"params must be a BlockWorldParams, got {type(params).__name__}")
     config = PlannerConfig(engine=engine, rules=rules or DEFAULT_RULES,
                            cap=DEFAULT_CAP if cap is None else cap,
-                           horizon=DEFAULT_HORIZON if horizon is None else horizon)
+                           horizon=DEFAULT_HORIZON if horizon is None else horizon,
+                           clearance=float(params.gripper_finger_width),
+                           margin=float(params.finger_margin))
     rules_sha = cache.file_sha256(config.rules)
     description = {
         "kind": kind, "mode": mode, "n_train": n_train, "n_test": n_test, "seed": int(seed),

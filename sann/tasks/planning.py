@@ -5,8 +5,13 @@ API (``sann.soar.Agent.input_link`` handles, or ``soar_sml`` ``Create*WME`` call
 runs until it halts, and the sequences are read back from the output-link. The input-link
 schema is documented at the top of the rule file.
 
-What the rules see is exactly what the networks see: the Table-1 feature rows (observed
-positions, size, id and the six noisy neighbour ids); they never see the true geometry.
+What the rules see is what the networks see, but for the whole scene at once: the Table-1
+feature rows of every block (observed positions, size, id and the six noisy neighbour ids),
+with each block's observed box faces (``^xmin .. ^zmax``, centre -/+ size/2) and its finger
+slabs for the gripper's ``clearance`` and ``margin`` (computed here from the same rows); they
+never see the true geometry. From them the rules derive side blockage for the gripper's
+clearance, which is wider than the sensor's neighbour gap: a block 3 units beside another has
+neighbour feature 0 there, yet the fingers do not fit (see the rule file's header).
 
 Speed. One agent is reused across scenes; between runs its working memory is reset with
 ``init-soar`` (``agent.init()`` in ours). Plans of different targets never interact, so the
@@ -18,6 +23,7 @@ there (``targets_per_run``; the scene stays on the input-link meanwhile).
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
@@ -26,12 +32,15 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .blocks import FEATURE_NAMES, NAMES, SIDES, Scene, features
+from .blocks import FEATURE_NAMES, NAMES, SIDES, BlockWorldParams, Scene, features
 
 ENGINES = ("sann", "soar_sml")
 DEFAULT_RULES = Path(__file__).resolve().parents[2] / "rules" / "blocks.soar"
 DEFAULT_CAP = 8
 DEFAULT_HORIZON = 8
+# Two blocks must overlap in height by more than this to block a finger (observed heights: the
+# true overlaps are multiples of 5, so 1 unit absorbs the sensor noise).
+Z_TOLERANCE = 1.0
 _COL = {name: i for i, name in enumerate(FEATURE_NAMES)}
 _SIDE_COLS = [_COL[s.capitalize()] for s in SIDES]
 
@@ -48,12 +57,16 @@ class PlanSequence(NamedTuple):
 
 @dataclass(frozen=True)
 class PlannerConfig:
-    """``cap``: most sequences per target; ``horizon``: largest T_o a plan may reach."""
+    """``cap``: most sequences per target; ``horizon``: largest T_o a plan may reach;
+    ``clearance``/``margin``: the gripper's finger width and pad margin (the defaults are
+    ``BlockWorldParams``'; :func:`sann.tasks.blocks.make_dataset` passes the dataset's)."""
 
     engine: str = "sann"
     rules: str | os.PathLike[str] = DEFAULT_RULES
     cap: int = DEFAULT_CAP
     horizon: int = DEFAULT_HORIZON
+    clearance: float = BlockWorldParams.gripper_finger_width
+    margin: float = BlockWorldParams.finger_margin
     targets_per_run: int | None = None  # None: the engine's best (all in ours, 3 in soar_sml)
 
     def __post_init__(self) -> None:
@@ -66,12 +79,21 @@ class PlannerConfig:
         tpr = self.targets_per_run
         if tpr is not None and (isinstance(tpr, bool) or not isinstance(tpr, int) or tpr < 1):
             raise ValueError(f"targets_per_run must be an integer >= 1 or None, got {tpr!r}")
+        for name in ("clearance", "margin"):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and not isinstance(value, bool)
+                    and math.isfinite(value) and value >= 0):
+                raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
         if not Path(self.rules).is_file():
             raise ValueError(f"rules file not found: {self.rules}")
 
 
-def _block_rows(feats: np.ndarray) -> list[tuple]:
-    """(id, name, size, x, y, z, [(side, neighbour id) ...]) per feature row."""
+def _block_rows(feats: np.ndarray, clearance: float, margin: float) -> list[tuple]:
+    """(id, name, size, x, y, z, [(side, neighbour id) ...], [(attribute, value) ...]) per
+    feature row. The attributes are the observed box's faces (centre -/+ size/2) and the bounds
+    of its finger slabs (faces -/+ ``clearance``; the pad: the faces shrunk by ``margin``; the
+    height range shrunk by ``Z_TOLERANCE``), computed here once per block so that the rules
+    compare pairs of blocks with predicates only."""
     feats = np.asarray(feats, dtype=np.float64)
     if feats.ndim != 2 or feats.shape[1] != len(FEATURE_NAMES):
         raise ValueError(f"features must be an (n, {len(FEATURE_NAMES)}) array, "
@@ -82,9 +104,24 @@ def _block_rows(feats: np.ndarray) -> list[tuple]:
         if not 1 <= bid <= len(NAMES):
             raise ValueError(f"block id {bid} is not in 1..{len(NAMES)}")
         rel = [(side, int(f[c])) for side, c in zip(SIDES, _SIDE_COLS, strict=True) if f[c]]
-        rows.append((bid, NAMES[bid - 1], int(f[_COL["Size"]]), float(f[0]), float(f[1]),
-                     float(f[2]), rel))
+        size = int(f[_COL["Size"]])
+        rows.append((bid, NAMES[bid - 1], size, float(f[0]), float(f[1]), float(f[2]), rel,
+                     _geometry(f[:3], size, clearance, margin)))
     return rows
+
+
+def _geometry(centre: np.ndarray, size: int, clearance: float, margin: float
+              ) -> list[tuple[str, float]]:
+    """The input-link geometry of one block (see the rule file's header)."""
+    lo, hi = centre - size / 2, centre + size / 2
+    out = [(f"{axis}{end}", float(v)) for k, axis in enumerate("xyz")
+           for end, v in (("min", lo[k]), ("max", hi[k]))]
+    for k, axis in enumerate("xy"):
+        out += [(f"{axis}slab-lo", float(lo[k] - clearance)),
+                (f"{axis}slab-hi", float(hi[k] + clearance)),
+                (f"{axis}pad-lo", float(lo[k] + margin)),
+                (f"{axis}pad-hi", float(hi[k] - margin))]
+    return out + [("zin-lo", float(lo[2] + Z_TOLERANCE)), ("zin-hi", float(hi[2] - Z_TOLERANCE))]
 
 
 class _SannBackend:
@@ -98,16 +135,16 @@ class _SannBackend:
         self.agent = Agent()
         self.agent.source(str(rules))
 
-    def run(self, rows: list[tuple], targets: Sequence[int], cap: int, horizon: int
+    def run(self, rows: list[tuple], targets: Sequence[int], config: PlannerConfig
             ) -> list[PlanSequence]:
         agent = self.agent
         agent.init()
         il = agent.input_link
-        il.add("cap", cap)
-        il.add("horizon", horizon)
+        il.add("cap", config.cap)
+        il.add("horizon", config.horizon)
         for t in targets:
             il.add("target", int(t))
-        for bid, name, size, x, y, z, rel in rows:
+        for bid, name, size, x, y, z, rel, faces in rows:
             b = il.add("block")
             b.add("id", bid)
             b.add("name", name)
@@ -117,6 +154,8 @@ class _SannBackend:
             b.add("z", z)
             for side, other in rel:
                 b.add(side, other)
+            for face, value in faces:
+                b.add(face, value)
         agent.run()
         out = []
         for attr, q in agent.output_link.children():
@@ -146,10 +185,11 @@ class _SmlBackend:
             raise RuntimeError(f"soar_sml could not source {rules}: {result}")
         self.agent.ExecuteCommandLine("watch 0")
 
-    def put_scene(self, rows: list[tuple], cap: int, horizon: int) -> list:
+    def put_scene(self, rows: list[tuple], config: PlannerConfig) -> list:
         a, il = self.agent, self.agent.GetInputLink()
-        top = [a.CreateIntWME(il, "cap", cap), a.CreateIntWME(il, "horizon", horizon)]
-        for bid, name, size, x, y, z, rel in rows:
+        top = [a.CreateIntWME(il, "cap", config.cap),
+               a.CreateIntWME(il, "horizon", config.horizon)]
+        for bid, name, size, x, y, z, rel, faces in rows:
             b = a.CreateIdWME(il, "block")
             top.append(b)
             a.CreateIntWME(b, "id", bid)
@@ -160,6 +200,8 @@ class _SmlBackend:
             a.CreateFloatWME(b, "z", z)
             for side, other in rel:
                 a.CreateIntWME(b, side, other)
+            for face, value in faces:
+                a.CreateFloatWME(b, face, value)
         return top
 
     def run_group(self, targets: Sequence[int]) -> list[PlanSequence]:
@@ -214,7 +256,7 @@ class Planner:
 
     def plan(self, feats: np.ndarray, targets: Iterable[int] | None = None
              ) -> dict[int, list[PlanSequence]]:
-        rows = _block_rows(feats)
+        rows = _block_rows(feats, self.config.clearance, self.config.margin)
         ids = [r[0] for r in rows]
         if len(set(ids)) != len(ids):
             raise ValueError("block ids in a scene must be unique")
@@ -225,13 +267,13 @@ class Planner:
         cfg = self.config
         found: list[PlanSequence] = []
         if isinstance(self._backend, _SmlBackend):
-            top = self._backend.put_scene(rows, cfg.cap, cfg.horizon)
+            top = self._backend.put_scene(rows, cfg)
             for g in range(0, len(wanted), self.group):
                 found += self._backend.run_group(wanted[g:g + self.group])
             self._backend.clear(top)
         else:
             for g in range(0, len(wanted), self.group):
-                found += self._backend.run(rows, wanted[g:g + self.group], cfg.cap, cfg.horizon)
+                found += self._backend.run(rows, wanted[g:g + self.group], cfg)
         result: dict[int, list[PlanSequence]] = {t: [] for t in wanted}
         for seq in found:
             result[seq.target].append(seq)

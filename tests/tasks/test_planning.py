@@ -85,11 +85,18 @@ def test_fork_budget_respects_cap() -> None:
     # three blockers on one pair: budget 4 = A first (2) or B first (2), then each branch
     # forks between its two lowest candidates: C is never first
     row = scene_from_blocks([
+        ("X", 10, (50, 50, 5)), ("A", 5, (42.5, 45.5, 2.5)), ("B", 5, (42.5, 54.5, 2.5)),
+        ("C", 5, (57.5, 50, 2.5)),
+    ])  # A and B 4 units apart (the finger width), so each can be grasped along y
+    assert _texts(plan_scene(row, targets=[24]))["X"] == [
+        "x:4:ABCX", "x:4:ACBX", "x:4:BACX", "x:4:BCAX", "y:1:X"]
+    # 2 units apart: beyond the sensor's neighbour gap, but each pins the other along y and X
+    # along x, so the x pair is a dead end (the rules see it from the geometry)
+    pinned = scene_from_blocks([
         ("X", 10, (50, 50, 5)), ("A", 5, (42.5, 46.5, 2.5)), ("B", 5, (42.5, 53.5, 2.5)),
         ("C", 5, (57.5, 50, 2.5)),
     ])
-    assert _texts(plan_scene(row, targets=[24]))["X"] == [
-        "x:4:ABCX", "x:4:ACBX", "x:4:BACX", "x:4:BCAX", "y:1:X"]
+    assert _texts(plan_scene(pinned, targets=[24]))["X"] == ["y:1:X"]
 
 
 def test_targets_per_run_does_not_change_plans() -> None:
