@@ -129,10 +129,10 @@ class Slot:
     def remove(self, pref: Preference) -> None:
         bucket = self.prefs.get(pref.type)
         if bucket is not None:
-            for index, other in enumerate(bucket):
-                if other is pref:
-                    del bucket[index]
-                    break
+            try:
+                bucket.remove(pref)  # a C-level search: Preference compares by identity
+            except ValueError:
+                pass
             if not bucket:
                 del self.prefs[pref.type]
         pref.live = False
