@@ -101,6 +101,49 @@ def dataset_benchmark(mode: str, n_train: int, n_test: int, seed: int,
     return results
 
 
+def training_benchmark(mode: str, n_train: int, n_test: int, seed: int, anchor: float) -> None:
+    """Training half: the SANN shallow net on D1-<mode> (dataset from the cache), the time to
+    reach >= 99% test accuracy (the epoch where the eq. 4 curve first drops to 1%), and the
+    whole default training run; ratios against the scene-generation anchor."""
+    from sann.experiments.blocks import BlocksExperiment, with_logical
+    from sann.nets import ShallowNet
+    from sann.train import train
+
+    data = make_dataset("D1", mode, n_train, n_test, seed=seed, workers=None)
+    config = BlocksExperiment().train
+    start = time.perf_counter()
+    run = train(lambda n: ShallowNet(n, hidden=5), with_logical(data.X_train, data.logical_train),
+                data.y_train, with_logical(data.X_test, data.logical_test), data.y_test,
+                seed=0, config=config)
+    seconds = time.perf_counter() - start
+    reached = next((i + 1 for i, e in enumerate(run.test_error) if e <= 0.01), None)
+    print(f"SANN D1-{mode}: {config.epochs} epochs in {seconds:.1f} s, final accuracy "
+          f"{run.accuracy:.4f}, {seconds / anchor:.1f}x the anchor")
+    if reached is None:
+        print("  never reached 99% test accuracy")
+    else:
+        to_99 = seconds * reached / config.epochs
+        verdict = "met" if to_99 <= 20 else "MISSED"
+        print(f"  >= 99% first at epoch {reached}: {to_99:.1f} s (target <= 20 s: {verdict}, "
+              f"goal 10 s), {to_99 / anchor:.1f}x the anchor")
+
+
+def quick_reproduce_benchmark() -> None:
+    """`python -m sann reproduce blocks --quick` from an empty cache (target <= 3 min)."""
+    import subprocess
+    import sys
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        env = dict(os.environ, SANN_CACHE=os.path.join(tmp, "cache"), TQDM_DISABLE="1")
+        start = time.perf_counter()
+        subprocess.run([sys.executable, "-m", "sann", "reproduce", "blocks", "--quick",
+                        "--out", os.path.join(tmp, "out")], check=True, env=env)
+        seconds = time.perf_counter() - start
+    verdict = "met" if seconds <= 180 else "MISSED"
+    print(f"reproduce blocks --quick, empty cache: {seconds:.1f} s (target <= 180 s: {verdict})")
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--mode", default="C3", choices=["C1", "C2", "C3"])
@@ -110,9 +153,20 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--engines", default="sann,soar_sml")
     parser.add_argument("--workers", type=int, default=2,
                         help="planning processes (the machine has 2 cores)")
+    parser.add_argument("--skip-datasets", action="store_true",
+                        help="only the training half (datasets from the cache)")
+    parser.add_argument("--quick-reproduce", action="store_true",
+                        help="also time `reproduce blocks --quick` from an empty cache")
     args = parser.parse_args(argv)
     engines = [e for e in args.engines.split(",") if e]
-    dataset_benchmark(args.mode, args.n_train, args.n_test, args.seed, engines, args.workers)
+    if not args.skip_datasets:
+        dataset_benchmark(args.mode, args.n_train, args.n_test, args.seed, engines, args.workers)
+    anchor, _ = time_scene_generation(args.mode, args.n_train + args.n_test, args.seed,
+                                      BlockWorldParams())
+    print(f"anchor (scene generation, {args.n_train + args.n_test} samples): {anchor:.2f} s")
+    training_benchmark(args.mode, args.n_train, args.n_test, args.seed, anchor)
+    if args.quick_reproduce:
+        quick_reproduce_benchmark()
 
 
 if __name__ == "__main__":
