@@ -52,8 +52,11 @@ class DeepNet(nn.Module):
             raise ValueError("DeepNet needs at least one hidden layer")
         if shallow is None:
             shallow = ShallowNet(n_inputs, hidden[0], n_outputs)
-        self.shallow = shallow
-        first = self.shallow.features[0]
+        # Register only the shared feature layer: the shallow net's own head is not part of
+        # the deep net, so it must not count among (or be optimised with) its parameters.
+        self.features = shallow.features
+        object.__setattr__(self, "_shallow", shallow)
+        first = shallow.features[0]
         if first.in_features != n_inputs or first.out_features != hidden[0]:
             raise ValueError(
                 f"the shallow net's first layer is {first.in_features}->{first.out_features}, "
@@ -65,9 +68,14 @@ class DeepNet(nn.Module):
         self.deeper = nn.Sequential(*layers)
         self.head = nn.Linear(hidden[-1], n_outputs)
 
+    @property
+    def shallow(self) -> ShallowNet:
+        """The shallow net whose feature layer this deep net shares."""
+        return self._shallow
+
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         return self.head(self.hidden(x))
 
     def hidden(self, x: torch.Tensor) -> torch.Tensor:
         """Activations of the last hidden layer."""
-        return self.deeper(self.shallow.features(x))
+        return self.deeper(self.features(x))

@@ -31,6 +31,10 @@ def test_deep_net_shares_the_shallow_nets_first_layer():
         shallow.features[0].weight.fill_(0.5)
     assert torch.all(deep.shallow.features[0].weight == 0.5)
     assert deep(torch.zeros(3, 131)).shape == (3, 2)
+    head = {id(p) for p in shallow.head.parameters()}
+    assert not head & {id(p) for p in deep.parameters()}, "the shallow head is not in the deep net"
+    assert sum(p.numel() for p in deep.parameters()) == (
+        131 * 64 + 64 + 64 * 32 + 32 + 32 * 16 + 16 + 16 * 2 + 2)
     assert deep.hidden(torch.zeros(3, 131)).shape == (3, 16)
 
 
