@@ -19,9 +19,9 @@ why constants carry their Python type.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Literal, Union
+from typing import Literal
 
-Constant = Union[str, int, float]
+Constant = str | int | float
 
 #: Relations allowed in a relational test. ``=`` is the plain equality test and is never
 #: stored as a Relational (an equality test is just a Const or a Var).
@@ -64,7 +64,7 @@ class Conjunction:
     tests: tuple[Test, ...]
 
 
-Test = Union[Var, Const, Relational, Disjunction, Conjunction]
+Test = Var | Const | Relational | Disjunction | Conjunction
 
 
 @dataclass(frozen=True)
@@ -91,7 +91,7 @@ class ConjunctiveNegation:
     conditions: tuple[ConditionElement, ...]
 
 
-ConditionElement = Union[Condition, ConjunctiveNegation]
+ConditionElement = Condition | ConjunctiveNegation
 
 
 @dataclass(frozen=True)
@@ -102,7 +102,7 @@ class FuncCall:
     args: tuple[RhsValue, ...]
 
 
-RhsValue = Union[Var, Const, FuncCall]
+RhsValue = Var | Const | FuncCall
 
 #: Unary preferences: acceptable, reject, require, prohibit, reconsider, best, worst,
 #: indifferent. Binary (with a referent): better ``>``, worse ``<``, indifferent ``=``;
@@ -129,7 +129,7 @@ class CallAction:
     call: FuncCall
 
 
-Action = Union[MakeAction, CallAction]
+Action = MakeAction | CallAction
 
 
 @dataclass(frozen=True)
