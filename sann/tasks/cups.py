@@ -41,6 +41,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from sann.tasks.sml_agent import SmlAgent
 from sann.vision.camera import Camera, default_camera, make_pose
 from sann.vision.detect import MAX_DETECTIONS, DetectConfig, Detection
 
@@ -189,18 +190,11 @@ class _SannBackend:
         self.agent = None
 
 
-class _SmlBackend:
+class _SmlBackend(SmlAgent):
     """The real Soar kernel through soar_sml; ``init-soar`` between frames."""
 
     def __init__(self, rules: Path) -> None:
-        import soar_sml as sml
-
-        self.kernel = sml.Kernel.CreateKernelInCurrentThread(True, 0)
-        self.agent = self.kernel.CreateAgent(f"cups{id(self)}")
-        result = self.agent.ExecuteCommandLine(f"source {{{rules}}}")
-        if not self.agent.GetLastCommandLineResult():
-            raise RuntimeError(f"soar_sml could not source {rules}: {result}")
-        self.agent.ExecuteCommandLine("watch 0")
+        super().__init__(rules, "cups")
 
     def _add(self, parent, attr: str, value: object):
         a = self.agent
@@ -223,28 +217,13 @@ class _SmlBackend:
                     self._add(c, attr, v)
         a.Commit()
         a.RunSelf(100_000)
-        out = []
-        ol = a.GetOutputLink()
-        if ol is not None:
-            for i in range(ol.GetNumberChildren()):
-                child = ol.GetChild(i)
-                if child.GetAttribute() != "sequence":
-                    continue
-                q = child.ConvertToIdentifier()
-                out.append(CupSequence(int(q.GetParameterValue("target")),
-                                       int(q.GetParameterValue("t-o")),
-                                       q.GetParameterValue("order")))
+        out = [CupSequence(int(t), int(t_o), order) for t, t_o, order
+               in self.output_sequences(("target", "t-o", "order"))]
         for w in top:
             a.DestroyWME(w)
         a.Commit()
         a.ExecuteCommandLine("init-soar")
         return out
-
-    def close(self) -> None:
-        if self.kernel is not None:
-            self.kernel.DestroyAgent(self.agent)
-            self.kernel.Shutdown()
-            self.kernel = None
 
 
 class CupPlanner:

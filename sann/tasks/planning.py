@@ -32,6 +32,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from sann.tasks.sml_agent import SmlAgent
+
 from .blocks import FEATURE_NAMES, NAMES, SIDES, BlockWorldParams, Scene, features
 
 ENGINES = ("sann", "soar_sml")
@@ -169,21 +171,14 @@ class _SannBackend:
         self.agent = None
 
 
-class _SmlBackend:
+class _SmlBackend(SmlAgent):
     """The real Soar kernel through soar_sml: the scene stays on the input-link while groups of
     targets are planned; ``init-soar`` between groups (SML re-sends the input-link)."""
 
     default_group = 3
 
     def __init__(self, rules: Path) -> None:
-        import soar_sml as sml
-
-        self.kernel = sml.Kernel.CreateKernelInCurrentThread(True, 0)
-        self.agent = self.kernel.CreateAgent(f"blocks{id(self)}")
-        result = self.agent.ExecuteCommandLine(f"source {{{rules}}}")
-        if not self.agent.GetLastCommandLineResult():
-            raise RuntimeError(f"soar_sml could not source {rules}: {result}")
-        self.agent.ExecuteCommandLine("watch 0")
+        super().__init__(rules, "blocks")
 
     def put_scene(self, rows: list[tuple], config: PlannerConfig) -> list:
         a, il = self.agent, self.agent.GetInputLink()
@@ -210,18 +205,8 @@ class _SmlBackend:
         wmes = [a.CreateIntWME(il, "target", int(t)) for t in targets]
         a.Commit()
         a.RunSelf(100_000)
-        out = []
-        ol = a.GetOutputLink()
-        if ol is not None:
-            for i in range(ol.GetNumberChildren()):
-                child = ol.GetChild(i)
-                if child.GetAttribute() != "sequence":
-                    continue
-                q = child.ConvertToIdentifier()
-                out.append(PlanSequence(int(q.GetParameterValue("target")),
-                                        q.GetParameterValue("pair"),
-                                        int(q.GetParameterValue("t-o")),
-                                        q.GetParameterValue("order")))
+        out = [PlanSequence(int(t), pair, int(t_o), order) for t, pair, t_o, order
+               in self.output_sequences(("target", "pair", "t-o", "order"))]
         for w in wmes:
             a.DestroyWME(w)
         a.ExecuteCommandLine("init-soar")
@@ -231,12 +216,6 @@ class _SmlBackend:
         for w in top:
             self.agent.DestroyWME(w)
         self.agent.Commit()
-
-    def close(self) -> None:
-        if self.kernel is not None:
-            self.kernel.DestroyAgent(self.agent)
-            self.kernel.Shutdown()
-            self.kernel = None
 
 
 class Planner:
