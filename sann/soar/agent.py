@@ -1651,7 +1651,7 @@ class Agent:
 
 
 class _JustificationMatch:
-    """A placeholder for the match of a new justification (see _justification_matches)."""
+    """A stand-in for the match of a new justification (see _justification_matches)."""
 
     __slots__ = ("level",)
 

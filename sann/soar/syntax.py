@@ -227,7 +227,7 @@ class _ToDataclasses(Transformer):
         self.file = file
         self.functions = functions
         self._fresh = 0
-        self._placeholders: list[str] = []  # this production's fresh variables, in order
+        self._fresh_names: list[str] = []  # this production's fresh variables, in order
         self._used: set[str] = set()  # this production's own variable names
         self._warnings: list[str] = []  # this production's, until its name is known
         self.warnings: list[str] = []  # issued by `parse` to its caller
@@ -235,10 +235,10 @@ class _ToDataclasses(Transformer):
 
     # -- helpers
 
-    def _placeholder(self, letter: str) -> Var:
+    def _fresh_variable(self, letter: str) -> Var:
         self._fresh += 1
         name = f"{_PLACEHOLDER}{self._fresh}{_PLACEHOLDER}{letter}"
-        self._placeholders.append(name)
+        self._fresh_names.append(name)
         return Var(name)
 
     def _syntax_error(self, message: str, line: int, column: int) -> SoarSyntaxError:
@@ -331,7 +331,8 @@ class _ToDataclasses(Transformer):
         del items[0]
         goal = items.pop(0).keyword if items and isinstance(items[0], _Goal) else None
         has_id = bool(items) and not isinstance(items[0], _AttrValueTests)
-        id_test = items.pop(0) if has_id else self._placeholder("i" if goal == "impasse" else "s")
+        letter = "i" if goal == "impasse" else "s"
+        id_test = items.pop(0) if has_id else self._fresh_variable(letter)
         if goal and not items:
             raise self._syntax_error(
                 f"expected an attribute test after '({goal}': add one such as "
@@ -351,11 +352,11 @@ class _ToDataclasses(Transformer):
         chain: list[Condition] = []
         ident: Test = id_test
         for step in avt.path[:-1]:
-            link = self._placeholder(_first_letter(step))
+            link = self._fresh_variable(_first_letter(step))
             chain.append(Condition(ident, step, link, goal=goal if ident is id_test else None))
             ident = link
         attr = avt.path[-1]
-        values = avt.values or ((self._placeholder(_first_letter(attr)), False),)
+        values = avt.values or ((self._fresh_variable(_first_letter(attr)), False),)
         step_goal = goal if ident is id_test else None
         last = [Condition(ident, attr, v, acceptable=plus, goal=step_goal) for v, plus in values]
         return _negate([*chain, *last]) if avt.negated else [*chain, *last]
@@ -428,7 +429,7 @@ class _ToDataclasses(Transformer):
     def _expand_make(self, ident: Var, make: _AttrValueMake) -> list[Action]:
         actions: list[Action] = []
         for step in make.path[:-1]:
-            link = self._placeholder(_first_letter(step))
+            link = self._fresh_variable(_first_letter(step))
             actions.append(MakeAction(ident, step, link))
             ident = link
         attr = make.path[-1]
@@ -499,14 +500,14 @@ class _ToDataclasses(Transformer):
         production = Production(
             name, tuple(conditions), tuple(actions), doc, tuple(flags), self._location(sp)
         )
-        if self._placeholders:
-            names = _fresh_names(self._placeholders, self._used)
+        if self._fresh_names:
+            names = _fresh_names(self._fresh_names, self._used)
             production = dataclasses.replace(
                 production,
                 conditions=tuple(_rename_element(c, names) for c in production.conditions),
                 actions=tuple(_rename_action(a, names) for a in production.actions),
             )
-        self._placeholders.clear()
+        self._fresh_names.clear()
         self._used.clear()
         _check_production(production, self.functions)
         self.warnings.extend(_where(production) + message for message in self._warnings)
