@@ -34,7 +34,16 @@ from .instantiation import (
 )
 from .memory import WME, Identifier, IdentifierFactory, Symbol
 from .preferences import ACCEPTABLE, PROHIBIT, REJECT, REQUIRE, Preference, Slot, preference_type
-from .production import Command, Condition, Const, FuncCall, MakeAction, Production, Var
+from .production import (
+    CallAction,
+    Command,
+    Condition,
+    Const,
+    FuncCall,
+    MakeAction,
+    Production,
+    Var,
+)
 from .rhs import FUNCTIONS, format_value
 from .trace import print_identifier, trace_preference, trace_wme
 
@@ -101,9 +110,9 @@ class Agent:
             "elaboration_cycles": self._e_cycles,
             "pe_cycles": self._pe_cycles,
             "production_firings": self._firings,
-            "wme_changes": self._wme_adds + self._wme_removes,
-            "wme_additions": self._wme_adds,
-            "wme_removals": self._wme_removes,
+            "wme_changes": 2 * self._timetag - len(self._wm),
+            "wme_additions": self._timetag,
+            "wme_removals": self._timetag - len(self._wm),
             "wm_size": len(self._wm),
             "wm_max": self._wm_max,
         }
@@ -348,7 +357,9 @@ class Agent:
         self._input_wmes: dict[Identifier, list[WME]] = {}
         self._operator_names: list[str] = []
         self._decisions = self._e_cycles = self._pe_cycles = self._firings = 0
-        self._wme_adds = self._wme_removes = self._wm_max = 0
+        # Every addition takes the next timetag and every removal leaves ``_wm``, so the
+        # kernel's addition and removal counts are ``_timetag`` and ``_timetag - len(_wm)``.
+        self._wm_max = 0
         self._halted = False
         self._stop = False
         self._phase = "input"
@@ -414,7 +425,6 @@ class Agent:
         if self._neg_watch:
             self._check_negations(wme)
         self.matcher.add_wme(wme)
-        self._wme_adds += 1
         if len(wm) > self._wm_max:
             self._wm_max = len(wm)
         if self.trace_level >= 4:
@@ -425,7 +435,6 @@ class Agent:
         if self._wm.pop(wme.timetag, None) is None:
             return
         self.matcher.remove_wme(wme)
-        self._wme_removes += 1
         value = wme.value
         if type(value) is Identifier and value.level is None:
             count = self._refs[value] - 1
@@ -725,11 +734,10 @@ class Agent:
         ``(* ^attr value)``), then the later-loaded production first."""
         newest = 0
         index = -1
-        i = 0
-        for wme in match.wmes:  # type: ignore[attr-defined]
+        for i, wme in enumerate(match.wmes):  # type: ignore[attr-defined]
             if wme is not None and wme.timetag > newest:
-                newest, index = wme.timetag, i
-            i += 1
+                newest = wme.timetag
+                index = i
         info = self._productions.get(match.production.name)  # type: ignore[attr-defined]
         if info is None:
             return (newest, 0, 0)
@@ -750,9 +758,8 @@ class Agent:
         self, match: object, info: ProductionInfo, goal: Goal, o_support: bool
     ) -> Instantiation:
         """Fire a match (``o_support``: it was queued as an o-assertion)."""
-        wmes = match.wmes  # type: ignore[attr-defined]
         name = info.production.name
-        inst = Instantiation(name, match, goal, wmes, o_support)
+        inst = Instantiation(name, match, goal, match.wmes, o_support)  # type: ignore[attr-defined]
         self._firings += 1
         info.firings += 1
         if self.trace_level >= 3:
@@ -765,12 +772,12 @@ class Agent:
         if not binds:
             bindings = dict(bindings)  # new identifiers are bound for this firing only
         operators = (
-            tested_operators(info, wmes, goal.id)
+            tested_operators(info, inst.wmes, goal.id)
             if o_support and info.declared != "o-support"
-            else []
+            else ()
         )
         prefs = inst.prefs
-        for action, plan in zip(info.actions, info.plans, strict=True):
+        for action, plan in info.steps:
             if plan is not None:
                 # (<id> ^attr value) with both already bound: no evaluation needed.
                 ident = bindings.get(plan[0])
@@ -781,26 +788,31 @@ class Agent:
                         pref.o_supported = True
                     prefs.append(pref)
                     continue
-            try:
-                if type(action) is MakeAction:
-                    pref = self._make_preference(action, bindings, inst)
-                    if pref is None:
-                        continue
-                    # Identifiers compare by identity, and never equal a constant.
-                    if o_support and pref.id not in operators:
-                        pref.o_supported = True
-                    prefs.append(pref)
-                else:
-                    self._call(action.call, bindings, inst)
-            except SoarError as error:
-                # Like the kernel: report, drop this action, go on with the others.
-                message = f"Error: production {name}: {error}"
-                self.errors.append(message)
-                self._emit("\n" + message + "\n")
+            pref = self._evaluate_action(action, bindings, inst)
+            if pref is not None:
+                # Identifiers compare by identity, and never equal a constant.
+                if o_support and pref.id not in operators:
+                    pref.o_supported = True
+                prefs.append(pref)
         if goal.level > 1:
             goal.insts.add(inst)
             self._handle_substate_preferences(inst)
         return inst
+
+    def _evaluate_action(
+        self, action: MakeAction | CallAction, bindings: dict[str, Symbol], inst: Instantiation
+    ) -> Preference | None:
+        """The general evaluation of an action; like the kernel, an RHS error is reported
+        and drops this action only."""
+        try:
+            if type(action) is MakeAction:
+                return self._make_preference(action, bindings, inst)
+            self._call(action.call, bindings, inst)  # type: ignore[union-attr]
+        except SoarError as error:
+            message = f"Error: production {inst.name}: {error}"
+            self.errors.append(message)
+            self._emit("\n" + message + "\n")
+        return None
 
     def _value(self, value: object, bindings: dict[str, Symbol], inst: Instantiation) -> Symbol:
         kind = type(value)
@@ -890,21 +902,22 @@ class Agent:
         rejects remove the older preferences for their values (a rule may remove and
         re-add the same value in one firing: the new preference survives)."""
         justifications, self._new_justifications = self._new_justifications, []
+        insts = [*justifications, *reversed(fired)] if justifications else fired[::-1]
         o_rejects: list[Preference] = []
-        added: list[Preference] = []
         tracing = self.trace_level >= 5
         add = self._add_preference
-        for inst in [*justifications, *reversed(fired)]:
+        for inst in insts:
             for pref in reversed(inst.prefs):
                 if tracing:
                     self._emit("\n+" + trace_preference(pref))
                 if pref.o_supported and pref.type == REJECT:
                     o_rejects.append(pref)
                     continue
-                added.append(pref)
                 add(pref)
         if o_rejects:
-            fresh = {id(pref) for pref in added}
+            # The preferences just added (o-rejects are never in a slot, so they may be
+            # in this set too without effect).
+            fresh = {id(pref) for inst in insts for pref in inst.prefs}
             for pref in o_rejects:
                 self._o_reject(pref, fresh)
 
@@ -960,15 +973,22 @@ class Agent:
         if slot is None:
             return
         target = reject.value
-        key = _vkey(target)
-        doomed = [
-            pref
-            for bucket in slot.prefs.values()
-            for pref in bucket
-            if (pref.value is target or _vkey(pref.value) == key)
-            and (type(target) is not Identifier or pref.value is target)
-            and id(pref) not in fresh
-        ]
+        buckets = slot.prefs.values()
+        if type(target) is Identifier:  # identifiers are equal only to themselves
+            doomed = [
+                pref
+                for bucket in buckets
+                for pref in bucket
+                if pref.value is target and id(pref) not in fresh
+            ]
+        else:
+            key = _vkey(target)
+            doomed = [
+                pref
+                for bucket in buckets
+                for pref in bucket
+                if _vkey(pref.value) == key and id(pref) not in fresh
+            ]
         for pref in doomed:
             if self.trace_level >= 5:
                 self._emit("\n-" + trace_preference(pref))
@@ -994,40 +1014,47 @@ class Agent:
             changed, self._changed = self._changed, []
             adds: list[tuple[Slot, Symbol]] = []
             removes: list[WME] = []
+            diff = self._diff_slot
             for slot in reversed(changed):
                 slot.changed = False
                 before = len(removes)
-                self._diff_slot(slot, adds, removes)
-                if self._gds_index and len(removes) > before:
+                diff(slot, adds, removes)
+                if len(removes) > before and self._gds_index:
                     # Like the kernel, while deciding the slot: a substate whose GDS holds
                     # a WME about to go is removed now; WMEs already decided still come
                     # and go in this phase, later slots see the substate gone.
                     self._gds_violations(removes[before:])
-            add_wme = self._add_wme
-            levels = self._level
-            for slot, value in adds:
-                ident = slot.id
-                wme = add_wme(ident, slot.attr, value)
-                slot.wmes[value if type(value) is not float else (float, value)] = wme
-                level = ident.level
-                if (level if level is not None else levels.get(ident, 1)) > 1:
-                    self._remember_source(wme, slot, (ACCEPTABLE,))
+            if adds:
+                self._add_slot_wmes(adds)
             context, self._changed_context = self._changed_context, []
             for slot in reversed(context):
                 slot.changed = False
                 self._update_acceptable_wmes(slot)
+            remove_wme = self._remove_wme
             for wme in removes:
-                self._remove_wme(wme)
+                remove_wme(wme)
             if self._pending_gds:
                 self._extend_gds()
             if self._unlinked:
                 self._collect_unlinked()
             for slot in changed:
                 if not slot.prefs and not slot.wmes:
-                    self._collect_garbage(slot)
+                    self._drop_slot(slot)
             for slot in context:
                 if not slot.prefs and not slot.wmes and not slot.acceptable_wmes:
                     self._collect_garbage(slot)
+
+    def _add_slot_wmes(self, adds: list[tuple[Slot, Symbol]]) -> None:
+        """Make the WMEs the slot diffs decided on (their keys hold a placeholder)."""
+        add_wme = self._add_wme
+        levels = self._level
+        for slot, value in adds:
+            ident = slot.id
+            wme = add_wme(ident, slot.attr, value)
+            slot.wmes[value if type(value) is not float else (float, value)] = wme
+            level = ident.level
+            if (level if level is not None else levels.get(ident, 1)) > 1:
+                self._remember_source(wme, slot, (ACCEPTABLE,))
 
     def _gds_violations(self, removes: list[WME]) -> bool:
         """Remove the substates whose goal dependency set holds a WME about to go, before
@@ -1050,28 +1077,43 @@ class Agent:
         """Soar 9.6 drops the o-supported preferences (and input WMEs) of identifiers that
         no WME links to any more; their i-supported WMEs wait for their instantiations to
         retract, as in the kernel. The slots are decided again in this same phase."""
-        while self._unlinked:
-            ident = self._unlinked.pop()
-            if ident in self._refs:
+        unlinked, refs = self._unlinked, self._refs
+        while unlinked:
+            ident = unlinked.pop()
+            if ident in refs:
                 continue
-            for wme in list(self._arch.get(ident, ())):
-                self._remove_arch(wme)
-            for slot in list(self._slots.get(ident, {}).values()):
-                for pref in slot.all_preferences():
-                    if pref.o_supported:
-                        self._remove_preference(pref)
-                # WMEs added in this very phase are dropped too (measured on the kernel);
-                # older i-supported ones wait for their instantiations to retract.
-                for key, wme in list(slot.wmes.items()):
-                    if wme is not None and wme.timetag > self._phase_timetag:
-                        del slot.wmes[key]
-                        self._remove_wme(wme)
+            arch = self._arch.get(ident)
+            if arch:
+                for wme in list(arch):
+                    self._remove_arch(wme)
+            slots = self._slots.get(ident)
+            if slots:
+                for slot in list(slots.values()):
+                    self._drop_unlinked_slot(slot)
+
+    def _drop_unlinked_slot(self, slot: Slot) -> None:
+        """Remove an unlinked slot's o-supported preferences and the WMEs it gained in this
+        phase (measured on the kernel); older i-supported WMEs wait for their
+        instantiations to retract."""
+        doomed = [pref for bucket in slot.prefs.values() for pref in bucket if pref.o_supported]
+        for pref in doomed:
+            self._remove_preference(pref)
+        wmes = slot.wmes
+        if wmes:
+            since = self._phase_timetag
+            fresh = [key for key, wme in wmes.items() if wme is not None and wme.timetag > since]
+            for key in fresh:
+                self._remove_wme(wmes.pop(key))
 
     def _diff_slot(self, slot: Slot, adds: list, removes: list[WME]) -> None:
         """A non-operator slot holds every acceptable value that is not rejected."""
         prefs = slot.prefs
-        acceptable = prefs.get(ACCEPTABLE)
         wmes = slot.wmes
+        if not prefs:  # the slot's last preference went: so do all its WMEs
+            removes.extend(wmes.values())
+            wmes.clear()
+            return
+        acceptable = prefs.get(ACCEPTABLE)
         if acceptable is not None and len(prefs) == 1 and len(acceptable) == 1:
             # Fast path: one acceptable preference and nothing else.
             value = acceptable[0].value
@@ -1106,18 +1148,24 @@ class Agent:
                 adds.append((slot, value))
 
     def _update_acceptable_wmes(self, slot: Slot) -> None:
+        """An operator slot shows each required or acceptable value as ``(S ^operator O +)``."""
         wanted: dict[object, Symbol] = {}
+        prefs = slot.prefs
         for ptype in (REQUIRE, ACCEPTABLE):
-            for pref in slot.of_type(ptype):
-                wanted.setdefault(_vkey(pref.value), pref.value)
-        for key, wme in list(slot.acceptable_wmes.items()):
-            if key not in wanted:
-                del slot.acceptable_wmes[key]
-                self._operator_proposal_gone(slot, wme)
-                self._remove_wme(wme)
+            for pref in prefs.get(ptype, ()):
+                value = pref.value
+                key = value if type(value) is not float else (float, value)
+                if key not in wanted:
+                    wanted[key] = value
+        current = slot.acceptable_wmes
+        gone = [key for key in current if key not in wanted]
+        for key in gone:
+            wme = current.pop(key)
+            self._operator_proposal_gone(slot, wme)
+            self._remove_wme(wme)
         for key, value in wanted.items():
-            if key not in slot.acceptable_wmes:
-                slot.acceptable_wmes[key] = self._add_wme(slot.id, "operator", value, True)
+            if key not in current:
+                current[key] = self._add_wme(slot.id, "operator", value, True)
 
     def _operator_proposal_gone(self, slot: Slot, wme: WME) -> None:
         """Soar 9.6: a selected operator whose proposal no longer matches is removed."""
@@ -1140,9 +1188,16 @@ class Agent:
 
     def _collect_garbage(self, slot: Slot) -> None:
         if slot.is_empty() and not slot.is_context:
-            slots = self._slots.get(slot.id)
-            if slots is not None and slots.get(_vkey(slot.attr)) is slot:
-                del slots[_vkey(slot.attr)]
+            self._drop_slot(slot)
+
+    def _drop_slot(self, slot: Slot) -> None:
+        """Forget an empty non-context slot (the caller checked that it is empty)."""
+        slots = self._slots.get(slot.id)
+        if slots is not None:
+            attr = slot.attr
+            key = attr if type(attr) is not float else (float, attr)
+            if slots.get(key) is slot:
+                del slots[key]
                 if not slots:
                     del self._slots[slot.id]
 
@@ -1342,13 +1397,17 @@ class Agent:
 
     def _decision_consistent(self, goal: Goal) -> bool:
         slot = goal.op_slot
+        prefs = slot.prefs
         selected_wme = goal.selected()
-        if selected_wme is not None and len(slot.prefs) == 1:
-            # Fast path: only acceptable preferences, all for the selected operator.
-            only = slot.prefs.get(ACCEPTABLE)
-            value = selected_wme.value
-            if only and all(p.value is value for p in only):
-                return True
+        if selected_wme is not None:
+            if len(prefs) == 1:
+                # Fast path: only acceptable preferences, all for the selected operator.
+                only = prefs.get(ACCEPTABLE)
+                value = selected_wme.value
+                if only and all(p.value is value for p in only):
+                    return True
+        elif goal.sub is None:
+            return _nothing_to_select(prefs)
         impasse, candidates = dec.run_preference_semantics(slot, None, consistency=True)
         selected = goal.selected()
         if selected is not None:
@@ -1648,6 +1707,25 @@ class Agent:
 
     def __repr__(self) -> str:
         return f"<Agent {self.name}: {len(self._productions)} productions, {len(self._wm)} wmes>"
+
+
+def _nothing_to_select(prefs: dict[str, list[Preference]]) -> bool:
+    """Whether preference semantics would find no candidate: no requirement, and every
+    acceptable value rejected or prohibited (a goal with neither a selected operator nor a
+    substate is consistent only then; any candidate at all ends in a selection, a tie, a
+    conflict or a constraint failure)."""
+    if not prefs:
+        return True
+    if REQUIRE in prefs:
+        return False
+    acceptable = prefs.get(ACCEPTABLE)
+    if not acceptable:
+        return True
+    if REJECT not in prefs and PROHIBIT not in prefs:
+        return False
+    excluded = {dec._key(p.value) for p in prefs.get(REJECT, ())}
+    excluded.update(dec._key(p.value) for p in prefs.get(PROHIBIT, ()))
+    return all(dec._key(p.value) in excluded for p in acceptable)
 
 
 class _JustificationMatch:

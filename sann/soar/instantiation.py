@@ -52,6 +52,8 @@ class ProductionInfo:
     #: ``(id name, attr, value is a constant, constant or variable name, preference)`` so
     #: firing can skip the general evaluator; ``None`` for any other action.
     plans: tuple[tuple[str, object, bool, object, str] | None, ...] = ()
+    #: ``zip(actions, plans)``, the pairs firing walks.
+    steps: tuple[tuple[MakeAction | CallAction, tuple | None], ...] = ()
 
     @classmethod
     def of(cls, production: Production) -> ProductionInfo:
@@ -87,6 +89,7 @@ class ProductionInfo:
             for value in values:
                 if value is not None:
                     rhs_vars.update(dict.fromkeys(variables_in(value)))
+        plans = tuple(_action_plan(action) for action in production.actions)
         return cls(
             production,
             tuple(indexes),
@@ -95,7 +98,8 @@ class ProductionInfo:
             make_ids,
             cond_masks=masks,
             rhs_vars=tuple(rhs_vars),
-            plans=tuple(_action_plan(action) for action in production.actions),
+            plans=plans,
+            steps=tuple(zip(production.actions, plans, strict=True)),
         )
 
 
