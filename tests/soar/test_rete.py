@@ -265,6 +265,70 @@ def test_ncc_shares_variables_with_positive_conditions(world: World) -> None:
     assert world.values("r", "x") == [a]
 
 
+def test_ncc_top_of_pile_follows_moves(world: World) -> None:
+    """The Towers-of-Hanoi pattern: a disk is free while no smaller disk is on its peg.  Moves
+    change the witnesses of blocked disks (the query NCC re-runs its search) and block free
+    ones (a WME arriving in an inner memory)."""
+    disks = {size: world.new("D") for size in (1, 2, 3)}
+    on = {size: world.add(disks[size], "on", "a") for size in disks}
+    for size, disk in disks.items():
+        world.add(world.s1, "disk", disk)
+        world.add(disk, "size", size)
+    world.rule("(state <s> ^disk <d>) (<d> ^size <k> ^on <p>)"
+               " -{(<s> ^disk <o>) (<o> ^on <p> ^size < <k>)}")
+    assert world.values("r", "d") == [disks[1]]
+
+    def move(size: int, peg: str) -> None:
+        world.m.remove_wme(on[size])
+        on[size] = world.add(disks[size], "on", peg)
+
+    move(1, "c")
+    assert world.values("r", "d") == sorted([disks[1], disks[2]], key=repr)
+    move(2, "b")
+    assert world.values("r", "d") == sorted(disks.values(), key=repr)
+    move(1, "b")  # now 1 blocks 2 on peg b
+    assert world.values("r", "d") == sorted([disks[1], disks[3]], key=repr)
+    move(3, "c")
+    move(1, "a")
+    assert world.values("r", "d") == sorted(disks.values(), key=repr)
+
+
+def test_ncc_inner_negation_invalidates_and_restores_witnesses(world: World) -> None:
+    """A blocker counts only while it is not removed: adding ``^removed`` kills the witness,
+    removing it brings the blocker back; a second blocker keeps the target blocked."""
+    target, top, other = world.new(), world.new(), world.new()
+    for block, name, below in ((target, "t", "table"), (top, "u", "t"), (other, "v", "t")):
+        world.add(world.s1, "block", block)
+        world.add(block, "name", name)
+        world.add(block, "on", below)
+    world.rule("(state <s> ^block <b>) (<b> ^name <n>)"
+               " -{(<s> ^block <a>) (<a> ^on <n> ^name <m>) -(<s> ^removed <m>)}")
+    assert world.values("r", "n") == ["u", "v"]
+    gone_u = world.add(world.s1, "removed", "u")
+    assert world.values("r", "n") == ["u", "v"]  # v still blocks t
+    gone_v = world.add(world.s1, "removed", "v")
+    assert world.values("r", "n") == ["t", "u", "v"]
+    world.m.remove_wme(gone_u)
+    assert world.values("r", "n") == ["u", "v"]
+    world.m.remove_wme(gone_v)
+    world.add(world.s1, "removed", "u")
+    assert world.values("r", "n") == ["u", "v"]
+
+
+def test_query_ncc_cleans_up_on_excise() -> None:
+    rete = Rete()
+    s1 = Identifier("S", 1, level=1)
+    b = Identifier("B", 1)
+    rete.add_wme(WME(s1, "block", b, 1))
+    rete.add_wme(WME(b, "size", 3, 2))
+    rete.add_production(parse_production(
+        "sp {q (state <s> ^block <b>) -{(<s> ^block <o>) (<o> ^size > 2)} --> (write x)}"))
+    assert rete.matches("q") == []
+    rete.excise("q")
+    assert _node_count(rete) == 1 and rete._amems == {}
+    assert all(info[0] == [] and not info[3] for info in rete._wme_info.values())
+
+
 # ----- incremental behaviour ------------------------------------------------------------------
 
 
