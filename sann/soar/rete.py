@@ -749,7 +749,7 @@ class _JoinNode(_Node):
     matcher."""
 
     __slots__ = ("amem", "pos", "getter", "amem_index", "parent_index", "check", "extend",
-                 "grow", "registry", "left")
+                 "grow", "registry", "left", "right")
 
     def __init__(self, rete: Rete, parent: _Node, key: object, amem: _AlphaMemory,
                  index: tuple[int, str] | None, check: Callable | None,
@@ -775,6 +775,9 @@ class _JoinNode(_Node):
         self.left = (self.pos, self.amem_index if index is not None else amem.wmes, check,
                      extend, self.grow, self.registry, self.tokens, self.index_list,
                      self.children)
+        self.right = (self.getter, self.parent_index if index is not None else parent.tokens,
+                      check, extend, self.grow, self.registry, self.tokens, self.index_list,
+                      self.children)
 
     def left_activate(self, t: _Token) -> None:
         vals = t[2]
@@ -811,18 +814,15 @@ class _JoinNode(_Node):
                 child.left_activate(tok)
 
     def right_activate(self, wme: WME) -> None:
-        if self.pos >= 0:
-            key = self.getter(wme)
+        getter, bucket, check, extend, grow, registry, tokens, index_list, children = self.right
+        if getter is not None:
+            key = getter(wme)
             if key.__class__ is float:
                 key = (_FLOAT, key)
-            bucket = self.parent_index.get(key)
+            bucket = bucket.get(key)
             if bucket is None:
                 return
-        else:
-            bucket = self.parent.tokens
-        check, extend, grow = self.check, self.extend, self.grow
-        tokens, index_list, children = self.tokens, self.index_list, self.children
-        built = self.registry[wme][1]
+        built = registry[wme][1]
         bound = wme.value if grow == 1 else None
         for t in bucket:
             vals = t[2]
@@ -1747,12 +1747,23 @@ class Rete:
         self._wme_info[wme] = [amems, {}, None, None]
         for amem in self._alpha_candidates(wme):
             accept = amem.accept
-            if accept is None or accept(wme):
-                amem.add(wme)
-                amems.append(amem)
-                for right_activate, parent_tokens in amem.activations:
-                    if parent_tokens:
-                        right_activate(wme)
+            if accept is not None and not accept(wme):
+                continue
+            amem.wmes[wme] = None  # _AlphaMemory.add, inline: this is every WME's path
+            for getter, index in amem.index_list:
+                key = getter(wme)
+                if key.__class__ is float:
+                    key = (_FLOAT, key)
+                bucket = index.get(key)
+                if bucket is None:
+                    index[key] = {wme: None}
+                else:
+                    bucket[wme] = None
+            amems.append(amem)
+            for right_activate, parent_tokens in amem.activations:
+                if parent_tokens:
+                    right_activate(wme)
+            if amem.listeners:
                 for node, k in amem.listeners:
                     if node.owners:
                         node.inner_added(k, wme)
@@ -1764,7 +1775,15 @@ class Rete:
         if info is None:
             raise ValueError(f"{wme!r} is not in working memory")
         for amem in info[0]:
-            amem.remove(wme)
+            del amem.wmes[wme]  # _AlphaMemory.remove, inline
+            for getter, index in amem.index_list:
+                key = getter(wme)
+                if key.__class__ is float:
+                    key = (_FLOAT, key)
+                bucket = index[key]
+                del bucket[wme]
+                if not bucket:
+                    del index[key]
         built = info[1]
         if built:
             for tok in built:
@@ -1787,9 +1806,10 @@ class Rete:
                 if node is not None and tok[5] is not None:
                     node.recheck(tok)
         for amem in info[0]:
-            for node, k in amem.listeners:
-                if node.owners and node.levels[k][6]:
-                    node.inner_removed(k, wme)
+            if amem.listeners:
+                for node, k in amem.listeners:
+                    if node.owners and node.levels[k][6]:
+                        node.inner_removed(k, wme)
 
     def clear_wmes(self) -> None:
         """Remove every WME at once: the same changes as ``remove_wme`` on each (every live
