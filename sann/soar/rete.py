@@ -170,6 +170,9 @@ class Match:
         return f"Match({self.production.name}, {list(self.wmes)})"
 
 
+_new_match = object.__new__  # a Match without the keyword handling of __init__ (hot path)
+
+
 class _Changes:
     """New and retracted matches since the last ``take_changes``; an appear/retract pair
     inside one interval cancels out."""
@@ -877,11 +880,22 @@ class _NegativeNode(_Node):
     def left_activate(self, t: _Token) -> None:
         vals = t[2]
         tok = _Token((t, None, vals, self, None, None))
-        _adopt(t, tok)
+        siblings = t[4]
+        if siblings is None:
+            t[4] = {tok: None}
+        else:
+            siblings[tok] = None
         self.every[tok] = None
-        if self.pos >= 0:
-            key = _hkey(vals[self.pos])
-            _index_add(self.every_index, key, tok)
+        pos = self.pos
+        if pos >= 0:
+            key = vals[pos]
+            if key.__class__ is float:
+                key = (_FLOAT, key)
+            same = self.every_index.get(key)
+            if same is None:
+                self.every_index[key] = {tok: None}
+            else:
+                same[tok] = None
             bucket = self.amem_index.get(key)
         else:
             bucket = self.amem.wmes
@@ -894,7 +908,18 @@ class _NegativeNode(_Node):
                         blockers = {}
                     blockers[wme] = None
         if blockers is None:
-            self.store(tok)
+            self.tokens[tok] = None  # _Node.store, inline
+            for pos, index in self.index_list:
+                key = vals[pos]
+                if key.__class__ is float:
+                    key = (_FLOAT, key)
+                same = index.get(key)
+                if same is None:
+                    index[key] = {tok: None}
+                else:
+                    same[tok] = None
+            for child in self.children:
+                child.left_activate(tok)
             return
         tok[5] = blockers
         info = self.rete._wme_info
@@ -1248,7 +1273,9 @@ class _ProductionNode(_Node):
         self.changes = rete._changes
 
     def left_activate(self, t: _Token) -> None:
-        match = Match(self.production)
+        match = _new_match(Match)
+        match.production = self.production
+        match._wmes = match._bindings = None
         match._token = t
         match._layout = self.layout
         tok = _Token((t, None, None, self, None, match))
