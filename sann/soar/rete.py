@@ -1543,7 +1543,8 @@ def _join_cost(cond: Condition, bound: set[str], singletons: set[str],
                volatile: set[object]) -> int:
     """Estimated fan-out class, cheapest first:
 
-    0. a check or a constant test (attribute and value fixed);
+    0. a check or a constant test (attribute and value fixed), or a step of a path (see
+       ``_path_hop``);
     1. a join on the value, bound elsewhere (``(<b> ^name <n>)``: the WMEs with that value
        are usually few);
     2. a constant attribute with a new value (all the values of a multi-valued attribute);
@@ -1555,6 +1556,8 @@ def _join_cost(cond: Condition, bound: set[str], singletons: set[str],
        matches rebuilds all the tokens below that condition.
     """
     late = isinstance(cond.attr_test, Const) and cond.attr_test.value in volatile
+    if _path_hop(cond, bound, late):
+        return 0
 
     def fixed(test: Test) -> bool:  # binds nothing new: a constant, a check or a filter
         return set(equality_vars(test)) <= bound
@@ -1574,6 +1577,17 @@ def _join_cost(cond: Condition, bound: set[str], singletons: set[str],
     own = set().union(*(equality_vars(t) for t in _fields(cond)))
     pending = set().union(*(relational_vars(t) for t in _fields(cond))) - bound - own
     return 3 if pending else 2
+
+
+def _path_hop(cond: Condition, bound: set[str], late: bool) -> bool:
+    """A step of a path such as ``^io.input-link``: a stable constant attribute leading from a
+    bound identifier to a variable the parser generated for the path.  Such steps are
+    structure (usually one value each), so they join first: their tokens then form a prefix
+    that stays put while the volatile conditions below it change."""
+    value = cond.value_test
+    return (not late and isinstance(cond.attr_test, Const) and isinstance(value, Var)
+            and "*" in value.name and value.name not in bound
+            and bool(bound.intersection(equality_vars(cond.id_test))))
 
 
 def _const_attributes(elements: tuple[ConditionElement, ...]) -> set[object]:
@@ -1627,6 +1641,13 @@ def _join_order(elements: tuple[ConditionElement, ...], bound: dict[str, int], s
         order.append(index)
         element = elements[index]
         if isinstance(element, Condition) and not element.negated:
+            late = isinstance(element.attr_test, Const) and element.attr_test.value in volatile
+            if _path_hop(element, set(age), late):
+                # A path step does not move the focus: the next join follows the object the
+                # path started from, not the path's own (single-valued) variable.
+                start = max(age[name] for name in equality_vars(element.id_test) if name in age)
+                age.setdefault(element.value_test.name, start)  # type: ignore[union-attr]
+                return
             for test in _fields(element):
                 for name in equality_vars(test):
                     age.setdefault(name, clock + len(order))
