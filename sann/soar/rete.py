@@ -5,7 +5,11 @@ Two matchers with one interface (see notes/RETE-API.md):
 - :class:`Rete` — the Doorenbos (1995) Rete: an alpha network hashed on constant attribute
   and value tests, hashed beta joins, negative and conjunctive-negation (NCC) nodes, shared
   prefixes, tree-based removal.  Adding or removing a WME costs in proportion to the alpha
-  memories and tokens it touches, not to the size of working memory.
+  memories and tokens it touches, not to the size of working memory.  A conjunctive negation
+  without a nested one is not a subnetwork of tokens but a compiled query that keeps one
+  witness per blocked token (:class:`_QueryNCCNode`): Python pays per token, and the
+  subnetwork's partial matches were most of the tokens in rules such as "the top disk of a
+  peg".
 - :class:`BruteForceMatcher` — a naive join over all WMEs, written to be obviously correct.
   It is the oracle of the property tests.
 
