@@ -32,6 +32,7 @@ from .instantiation import (
     match_goal,
     tested_operators,
 )
+from .io import InputHandle, OutputHandle
 from .memory import WME, Identifier, IdentifierFactory, Symbol
 from .preferences import ACCEPTABLE, PROHIBIT, REJECT, REQUIRE, Preference, Slot, preference_type
 from .production import (
@@ -283,17 +284,14 @@ class Agent:
         return list(self._operator_names)
 
     @property
-    def input_link(self):  # type: ignore[no-untyped-def]
-        from .io import InputHandle
-
-        if self._input_handle is None:
-            self._input_handle = InputHandle(self, self._input_link_id, None)
-        return self._input_handle
+    def input_link(self) -> InputHandle:
+        handle = self._input_handle
+        if handle is None:
+            handle = self._input_handle = InputHandle(self, self._input_link_id, None)
+        return handle
 
     @property
-    def output_link(self):  # type: ignore[no-untyped-def]
-        from .io import OutputHandle
-
+    def output_link(self) -> OutputHandle:
         return OutputHandle(self, self._output_link_id)
 
     # -------------------------------------------------------------- RHS context
@@ -327,7 +325,7 @@ class Agent:
         """Fresh working memory and counters, then the top state as the kernel makes it."""
         self._ids = IdentifierFactory()
         self._epoch = getattr(self, "_epoch", 0) + 1
-        self._input_handle = None
+        self._input_handle: InputHandle | None = None
         self._timetag = 0
         self._wm: dict[int, WME] = {}
         self._slots: dict[Identifier, dict[object, Slot]] = {}
@@ -445,11 +443,11 @@ class Agent:
                 self._unlinked.append(value)
         if self.trace_level >= 4:
             self._emit("\n<=WM: " + trace_wme(wme))
-        dependents = self._dependents.pop(wme, None)
+        dependents = self._dependents.pop(wme, None) if self._dependents else None
         if dependents:
             for inst in dependents:
                 self._schedule_retraction(inst)
-        goals = self._gds_index.pop(wme, None)
+        goals = self._gds_index.pop(wme, None) if self._gds_index else None
         if goals:
             for goal in goals:
                 if goal.alive:
@@ -520,23 +518,28 @@ class Agent:
         self._phase = "input"
 
     def _elaboration_phase(self, apply: bool) -> None:
-        """Run one elaboration cycle of the phase, or end the phase at quiescence."""
+        """Run elaboration cycles until quiescence ends the phase, or the run stops (a halt
+        or an interrupt takes effect after the cycle it happened in, as in the kernel)."""
         end = "output" if apply else "decide"
         if self._phase_cycles == 0 and apply and self.trace_level >= 2 and self._active is None:
             self._emit("\n--- Application Phase ---\n")
-        goal, firing = self._next_active(apply)
-        if firing == "":
-            self._consistent_through(None)
-            self._end_phase(apply, end)
-            return
-        self._elaboration_cycle(goal, firing)
-        self._e_cycles += 1
-        self._phase_cycles += 1
-        if firing == "PE":
-            self._pe_cycles += 1
-        if self._phase_cycles >= self.max_elaborations and not self._halted:
-            self._emit(f"\nWarning: reached max-elaborations; proceeding to {end} phase.")
-            self._end_phase(apply, end)
+        while True:
+            goal, firing = self._next_active(apply)
+            if firing == "":
+                self._consistent_through(None)
+                self._end_phase(apply, end)
+                return
+            self._elaboration_cycle(goal, firing)
+            self._e_cycles += 1
+            self._phase_cycles += 1
+            if firing == "PE":
+                self._pe_cycles += 1
+            if self._phase_cycles >= self.max_elaborations and not self._halted:
+                self._emit(f"\nWarning: reached max-elaborations; proceeding to {end} phase.")
+                self._end_phase(apply, end)
+                return
+            if self._stop or self._halted:
+                return
 
     def _end_phase(self, apply: bool, end: str) -> None:
         if self.trace_level >= 2:
@@ -635,6 +638,9 @@ class Agent:
         matches = list(queue.items())
         queue.clear()
         fired: list[Instantiation] = []
+        o_support = firing == "PE"
+        pending_goal = self._pending_goal
+        fire = self._fire
         for match, info in reversed(matches):
             if type(match) is _JustificationMatch:
                 if change_level and match.level <= change_level:
@@ -643,8 +649,8 @@ class Agent:
             if change_level and self._touches_level(match, info, change_level):
                 queue[match] = info
                 continue
-            self._pending_goal.pop(match, None)
-            fired.append(self._fire(match, info, goal, firing == "PE"))
+            pending_goal.pop(match, None)
+            fired.append(fire(match, info, goal, o_support))
         self._assert_preferences(fired)
         return True
 
@@ -686,21 +692,36 @@ class Agent:
         node is activated first); firing then takes them newest first, like the kernel's
         match-set lists."""
         new, gone = self.matcher.take_changes()
-        if len(new) > 1 and not in_match_order:
-            new = sorted(new, key=self._creation_key)
-        if len(gone) > 1:
-            gone = sorted(gone, key=self._creation_key)
+        if gone:
+            self._retract_matches(gone)
+        if new:
+            if len(new) > 1 and not in_match_order:
+                new = sorted(new, key=self._creation_key)
+            self._queue_matches(new)
+
+    def _retract_matches(self, gone: list) -> None:
+        """Schedule the retraction of fired matches that stopped matching, in creation
+        order (it decides the order of retraction); unfired ones just leave their queue."""
+        inst_of = self._inst_of
+        pending_goal = self._pending_goal
+        fired: list[Instantiation] = []
         for match in gone:
-            inst = self._inst_of.pop(match, None)
-            if inst is None:
-                goal = self._pending_goal.pop(match, None)
-                if goal is not None:
-                    goal.pending_i.pop(match, None)
-                    goal.pending_o.pop(match, None)
+            inst = inst_of.pop(match, None)
+            if inst is not None:
+                fired.append(inst)
                 continue
+            goal = pending_goal.pop(match, None)
+            if goal is not None:
+                goal.pending_i.pop(match, None)
+                goal.pending_o.pop(match, None)
+        if len(fired) > 1:
+            key = self._creation_key
+            fired.sort(key=lambda inst: key(inst.match))
+        for inst in fired:
             self._schedule_retraction(inst)
-        if not new:
-            return
+
+    def _queue_matches(self, new: list) -> None:
+        """Queue new matches at their goals as i- or o-assertions."""
         top = self._top
         only_top = top.sub is None
         productions = self._productions
@@ -943,7 +964,14 @@ class Agent:
         slot = slots.get(key)
         if slot is None:
             slot = slots[key] = Slot(ident, attr, False)
-        slot.add(pref)
+        # Slot.add, inlined: the kernel puts a new preference at the head of its list.
+        bucket = slot.prefs.get(pref.type)
+        if bucket is None:
+            slot.prefs[pref.type] = [pref]
+        else:
+            bucket.insert(0, pref)
+        pref.slot = slot
+        pref.live = True
         if slot.is_context:
             self._context_changed_at(ident)
             if not slot.changed:
@@ -958,9 +986,6 @@ class Agent:
         if slot is None or not pref.live:
             return
         slot.remove(pref)
-        self._mark_changed(slot)
-
-    def _mark_changed(self, slot: Slot) -> None:
         if slot.is_context:
             self._context_changed_at(slot.id)
         if not slot.changed:
@@ -969,7 +994,11 @@ class Agent:
 
     def _o_reject(self, reject: Preference, fresh: set[int] = frozenset()) -> None:  # type: ignore[assignment]
         """An o-supported reject removes every preference for that value from the slot."""
-        slot = self._slot(reject.id, reject.attr, create=False)
+        slots = self._slots.get(reject.id)
+        if slots is None:
+            return
+        attr = reject.attr
+        slot = slots.get(attr if type(attr) is not float else (float, attr))
         if slot is None:
             return
         target = reject.value
@@ -981,13 +1010,23 @@ class Agent:
                 for pref in bucket
                 if pref.value is target and id(pref) not in fresh
             ]
-        else:
-            key = _vkey(target)
+        elif type(target) is float:  # 1.0 is not the symbol 1
             doomed = [
                 pref
                 for bucket in buckets
                 for pref in bucket
-                if _vkey(pref.value) == key and id(pref) not in fresh
+                if type(pref.value) is float
+                and (pref.value is target or pref.value == target)
+                and id(pref) not in fresh
+            ]
+        else:
+            doomed = [
+                pref
+                for bucket in buckets
+                for pref in bucket
+                if pref.value == target
+                and type(pref.value) is not float
+                and id(pref) not in fresh
             ]
         for pref in doomed:
             if self.trace_level >= 5:
@@ -1676,22 +1715,25 @@ class Agent:
 
     def _apply_input_ops(self) -> None:
         ops, self._input_ops = self._input_ops, []
+        add_wme = self._add_wme
+        arch = self._arch
         for op in ops:
             if op[0] == "add":
                 _, handle, ident, attr, value = op
                 if handle.removed:
                     continue
-                wme = self._add_wme(ident, attr, value)
-                self._arch.setdefault(ident, []).append(wme)
+                wme = add_wme(ident, attr, value)
+                bucket = arch.get(ident)
+                if bucket is None:
+                    arch[ident] = [wme]
+                else:
+                    bucket.append(wme)
                 handle.wme = wme
             else:
                 _, handle = op
                 if handle.wme is not None:
                     self._remove_arch(handle.wme)
                     handle.wme = None
-
-    def _queue_input(self, op: tuple) -> None:
-        self._input_ops.append(op)
 
     # ------------------------------------------------------------- output text
 

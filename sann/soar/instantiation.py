@@ -176,12 +176,15 @@ def is_o_supported(
     elaboration of that operator."""
     if info.declared is not None:
         return info.declared == "o-support"
-    operators = [
-        wmes[i].value  # type: ignore[union-attr]
-        for i in info.operator_conditions
-        if wmes[i] is not None and wmes[i].id is goal  # type: ignore[union-attr]
-    ]
-    if not operators:
+    operators = None
+    for i in info.operator_conditions:
+        wme = wmes[i]
+        if wme is not None and wme.id is goal:
+            if operators is None:
+                operators = [wme.value]
+            else:
+                operators.append(wme.value)
+    if operators is None:
         return False
     make_ids = info.make_ids
     if not make_ids:
@@ -189,7 +192,12 @@ def is_o_supported(
     bindings = match.bindings if match is not None else {}  # type: ignore[attr-defined]
     for name in make_ids:
         value = bindings.get(name)
-        if value is None or not any(value is op for op in operators):
+        if value is None:
+            return True
+        if type(value) is Identifier:
+            if value not in operators:  # identifiers are equal only to themselves
+                return True
+        elif not any(value is op for op in operators):
             return True
     return False
 

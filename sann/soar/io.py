@@ -36,9 +36,10 @@ class WMEHandle:
         if self.removed:
             return
         self.removed = True
-        if self.wme is not None and self.wme.timetag not in self._agent._wm:
+        agent = self._agent
+        if self.wme is not None and self.wme.timetag not in agent._wm:
             return  # gone already (init() cleared working memory)
-        self._agent._queue_input(("remove", self))
+        agent._input_ops.append(("remove", self))
 
     def __repr__(self) -> str:
         return f"<input ({self.id} ^{self.attr} {self.value})>"
@@ -46,6 +47,8 @@ class WMEHandle:
 
 class InputHandle:
     """An identifier on the input side: the input-link itself or one made under it."""
+
+    __slots__ = ("_agent", "identifier", "_link", "_children", "_sub", "_epoch")
 
     def __init__(self, agent: Agent, ident: Identifier, link: WMEHandle | None) -> None:
         self._agent = agent
@@ -62,12 +65,19 @@ class InputHandle:
     def add(self, attr: str, value: object = _MISSING) -> InputHandle | WMEHandle:
         """``add("block")`` makes a new identifier and returns its handle; ``add("id", 3)``
         a constant and ``add("on", handle)`` a link, returning the WME handle."""
-        self._check_live()
+        agent = self._agent
+        link = self._link
+        if self._epoch != agent._epoch or (link is not None and link.removed):
+            self._check_live()  # raises the error that says which
         if not isinstance(attr, str) or not attr:
             raise SoarRuntimeError(f"input attribute must be a non-empty string, got {attr!r}")
         kind = type(value)
         if kind is str or kind is int or kind is float:  # the common case, checked first
-            return self._queue(attr, value)  # type: ignore[arg-type]
+            ident = self.identifier
+            handle = WMEHandle(agent, ident, attr, value)  # type: ignore[arg-type]
+            self._children.append(handle)
+            agent._input_ops.append(("add", handle, ident, attr, value))
+            return handle
         if value is _MISSING:
             ident = self._agent._new_id(attr, 1)
             link = self._queue(attr, ident)
@@ -156,10 +166,15 @@ class OutputHandle:
 
     def get(self, attr: str, default: object = None) -> Symbol | OutputHandle | object:
         """The (oldest) value of ``attr``, or ``default``."""
-        for key, value in self.children():
-            if key == attr:
-                return value
-        return default
+        oldest: WME | None = None
+        for wme in self._agent._augmentations(self.identifier):
+            if (
+                wme.attr == attr
+                and not wme.acceptable
+                and (oldest is None or wme.timetag < oldest.timetag)
+            ):
+                oldest = wme
+        return default if oldest is None else self._wrap(oldest.value)
 
     def all(self, attr: str) -> list[Symbol | OutputHandle]:
         return [value for key, value in self.children() if key == attr]

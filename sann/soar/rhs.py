@@ -50,7 +50,10 @@ def _format_float(value: float) -> str:
 
 
 def _number(name: str, value: Symbol) -> int | float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
+    kind = type(value)
+    if kind is int or kind is float:  # the usual case, without building a union type
+        return value  # type: ignore[return-value]
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise SoarRuntimeError(f"({name}): {format_value(value)} is not a number")
     return value
 
