@@ -19,6 +19,7 @@ import os
 import sys
 import weakref
 from collections.abc import Iterable, Iterator
+from operator import attrgetter
 from pathlib import Path
 from typing import TextIO
 
@@ -49,6 +50,8 @@ from .rhs import FUNCTIONS, format_value
 from .trace import print_identifier, trace_preference, trace_wme
 
 PHASES = ("input", "propose", "decide", "apply", "output")
+
+_TIMETAG = attrgetter("timetag")
 
 
 def _default_matcher() -> type:
@@ -115,7 +118,7 @@ class Agent:
             "wme_additions": self._timetag,
             "wme_removals": self._timetag - len(self._wm),
             "wm_size": len(self._wm),
-            "wm_max": self._wm_max,
+            "wm_max": max(self._wm_max, len(self._wm)),
         }
 
     @property
@@ -423,14 +426,17 @@ class Agent:
         if self._neg_watch:
             self._check_negations(wme)
         self.matcher.add_wme(wme)
-        if len(wm) > self._wm_max:
-            self._wm_max = len(wm)
         if self.trace_level >= 4:
             self._emit("\n=>WM: " + trace_wme(wme))
         return wme
 
     def _remove_wme(self, wme: WME) -> None:
-        if self._wm.pop(wme.timetag, None) is None:
+        wm = self._wm
+        if len(wm) > self._wm_max:
+            # Working memory only shrinks here, so its high-water mark is reached just
+            # before a removal (or now: see stats).
+            self._wm_max = len(wm)
+        if wm.pop(wme.timetag, None) is None:
             return
         self.matcher.remove_wme(wme)
         value = wme.value
@@ -753,16 +759,15 @@ class Agent:
         """Kernel order of match creation: by the newest matched WME; for one WME, by the
         alpha memory that passed it (the kernel visits ``(* ^attr *)`` before
         ``(* ^attr value)``), then the later-loaded production first."""
-        newest = 0
-        index = -1
-        for i, wme in enumerate(match.wmes):  # type: ignore[attr-defined]
-            if wme is not None and wme.timetag > newest:
-                newest = wme.timetag
-                index = i
+        wmes = match.wmes  # type: ignore[attr-defined]
+        # The first WME with the highest timetag (max keeps the first of equals).
+        newest = max(filter(None, wmes), key=_TIMETAG, default=None)
         info = self._productions.get(match.production.name)  # type: ignore[attr-defined]
         if info is None:
-            return (newest, 0, 0)
-        return (newest, info.cond_masks[index] if index >= 0 else 0, -info.load_index)
+            return (0 if newest is None else newest.timetag, 0, 0)
+        if newest is None:
+            return (0, 0, -info.load_index)
+        return (newest.timetag, info.cond_masks[wmes.index(newest)], -info.load_index)
 
     def _schedule_retraction(self, inst: Instantiation) -> None:
         if inst.retracted:
@@ -798,13 +803,17 @@ class Agent:
             else ()
         )
         prefs = inst.prefs
-        for action, plan in info.steps:
-            if plan is not None:
-                # (<id> ^attr value) with both already bound: no evaluation needed.
-                ident = bindings.get(plan[0])
-                value = plan[3] if plan[2] else bindings.get(plan[3])  # type: ignore[arg-type]
-                if type(ident) is Identifier and value is not None:
-                    pref = Preference(plan[4], ident, plan[1], value, None, inst)
+        for action, id_name, attr, constant, value, ptype in info.steps:
+            if id_name is not None:
+                # (<id> ^attr value) on a bound identifier: no general evaluation needed.
+                ident = bindings.get(id_name)
+                if type(ident) is Identifier:
+                    if not constant:
+                        name = value
+                        value = bindings.get(name)  # type: ignore[arg-type]
+                        if value is None:  # an unbound variable names a new identifier
+                            value = bindings[name] = self._new_id(name, goal.level)  # type: ignore[arg-type]
+                    pref = Preference(ptype, ident, attr, value, None, inst)
                     if o_support and ident not in operators:
                         pref.o_supported = True
                     prefs.append(pref)
@@ -1051,14 +1060,18 @@ class Agent:
         self._phase_timetag = self._timetag
         while self._changed or self._changed_context:
             changed, self._changed = self._changed, []
-            adds: list[tuple[Slot, Symbol]] = []
+            adds: list[tuple[Slot, object, Symbol]] = []
             removes: list[WME] = []
             diff = self._diff_slot
+            gds_index = self._gds_index
             for slot in reversed(changed):
                 slot.changed = False
+                if not gds_index:
+                    diff(slot, adds, removes)
+                    continue
                 before = len(removes)
                 diff(slot, adds, removes)
-                if len(removes) > before and self._gds_index:
+                if len(removes) > before:
                     # Like the kernel, while deciding the slot: a substate whose GDS holds
                     # a WME about to go is removed now; WMEs already decided still come
                     # and go in this phase, later slots see the substate gone.
@@ -1083,14 +1096,14 @@ class Agent:
                 if not slot.prefs and not slot.wmes and not slot.acceptable_wmes:
                     self._collect_garbage(slot)
 
-    def _add_slot_wmes(self, adds: list[tuple[Slot, Symbol]]) -> None:
-        """Make the WMEs the slot diffs decided on (their keys hold a placeholder)."""
+    def _add_slot_wmes(self, adds: list[tuple[Slot, object, Symbol]]) -> None:
+        """Make the WMEs the slot diffs decided on: ``(slot, value key, value)``, the key
+        holding a placeholder until now."""
         add_wme = self._add_wme
         levels = self._level
-        for slot, value in adds:
+        for slot, key, value in adds:
             ident = slot.id
-            wme = add_wme(ident, slot.attr, value)
-            slot.wmes[value if type(value) is not float else (float, value)] = wme
+            wme = slot.wmes[key] = add_wme(ident, slot.attr, value)
             level = ident.level
             if (level if level is not None else levels.get(ident, 1)) > 1:
                 self._remember_source(wme, slot, (ACCEPTABLE,))
@@ -1153,7 +1166,10 @@ class Agent:
             wmes.clear()
             return
         acceptable = prefs.get(ACCEPTABLE)
-        if acceptable is not None and len(prefs) == 1 and len(acceptable) == 1:
+        if acceptable is not None and len(prefs) == 1 and len(acceptable) > 1:
+            self._diff_acceptable(slot, acceptable, adds, removes)
+            return
+        if acceptable is not None and len(prefs) == 1:
             # Fast path: one acceptable preference and nothing else.
             value = acceptable[0].value
             key = value if type(value) is not float else (float, value)
@@ -1165,7 +1181,7 @@ class Agent:
             for other in list(wmes):
                 removes.append(wmes.pop(other))
             wmes[key] = None  # type: ignore[assignment]
-            adds.append((slot, value))
+            adds.append((slot, key, value))
             return
         wanted: dict[object, Symbol] = {}
         if acceptable:
@@ -1184,7 +1200,33 @@ class Agent:
         for key, value in wanted.items():
             if key not in wmes:
                 wmes[key] = None  # type: ignore[assignment]
-                adds.append((slot, value))
+                adds.append((slot, key, value))
+
+    @staticmethod
+    def _diff_acceptable(
+        slot: Slot, acceptable: list[Preference], adds: list, removes: list[WME]
+    ) -> None:
+        """A slot with only acceptable preferences (the usual multi-valued slot) holds
+        their distinct values. Sets find what changed without rebuilding the kernel's
+        candidate order, which only the new values need (see the general case)."""
+        wmes = slot.wmes
+        present = {
+            p.value if type(p.value) is not float else (float, p.value) for p in acceptable
+        }
+        gone = [key for key in wmes if key not in present]
+        for key in gone:
+            removes.append(wmes.pop(key))
+        if len(present) == len(wmes):
+            return
+        new: dict[object, Symbol] = {}
+        for pref in acceptable:  # head first: a value's first occurrence is its newest
+            value = pref.value
+            key = value if type(value) is not float else (float, value)
+            if key not in wmes and key not in new:
+                new[key] = value
+        for key, value in reversed(new.items()):  # the kernel's candidate list, front-first
+            wmes[key] = None  # type: ignore[assignment]
+            adds.append((slot, key, value))
 
     def _update_acceptable_wmes(self, slot: Slot) -> None:
         """An operator slot shows each required or acceptable value as ``(S ^operator O +)``."""

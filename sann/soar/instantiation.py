@@ -52,8 +52,9 @@ class ProductionInfo:
     #: ``(id name, attr, value is a constant, constant or variable name, preference)`` so
     #: firing can skip the general evaluator; ``None`` for any other action.
     plans: tuple[tuple[str, object, bool, object, str] | None, ...] = ()
-    #: ``zip(actions, plans)``, the pairs firing walks.
-    steps: tuple[tuple[MakeAction | CallAction, tuple | None], ...] = ()
+    #: Per action, what firing walks: ``(action, id name, attr, value is a constant,
+    #: constant or variable name, preference)`` from its plan, or ``(action, None, ...)``.
+    steps: tuple[tuple[MakeAction | CallAction, str | None, object, bool, object, str], ...] = ()
 
     @classmethod
     def of(cls, production: Production) -> ProductionInfo:
@@ -99,7 +100,10 @@ class ProductionInfo:
             cond_masks=masks,
             rhs_vars=tuple(rhs_vars),
             plans=plans,
-            steps=tuple(zip(production.actions, plans, strict=True)),
+            steps=tuple(
+                (action, *(plan or (None, None, False, None, "")))
+                for action, plan in zip(production.actions, plans, strict=True)
+            ),
         )
 
 

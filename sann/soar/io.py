@@ -116,8 +116,12 @@ class InputHandle:
         self._clear()
 
     def _clear(self) -> None:
-        for child in list(self._children):
-            self._remove_child(child)
+        children, self._children = self._children, []
+        for child in children:
+            child.remove()
+            sub = self._sub.pop(id(child), None)
+            if sub is not None:
+                sub._clear()
 
     def _remove_child(self, child: WMEHandle) -> None:
         child.remove()
