@@ -33,7 +33,7 @@ from .instantiation import (
     match_goal,
     tested_operators,
 )
-from .io import InputHandle, OutputHandle
+from .io import InputHandle, OutputHandle, WMEHandle
 from .memory import WME, Identifier, IdentifierFactory, Symbol
 from .preferences import ACCEPTABLE, PROHIBIT, REJECT, REQUIRE, Preference, Slot, preference_type
 from .production import (
@@ -354,7 +354,8 @@ class Agent:
         self._unlinked: list[Identifier] = []
         self._dependents: dict[WME, list[Instantiation]] = {}
         self._gds_index: dict[WME, set[Goal]] = {}
-        self._input_ops: list[tuple] = []
+        #: Input handles whose WME is to be added or removed at the next input phase.
+        self._input_ops: list[WMEHandle] = []
         self._input_wmes: dict[Identifier, list[WME]] = {}
         self._operator_names: list[str] = []
         self._decisions = self._e_cycles = self._pe_cycles = self._firings = 0
@@ -1165,24 +1166,27 @@ class Agent:
             removes.extend(wmes.values())
             wmes.clear()
             return
-        acceptable = prefs.get(ACCEPTABLE)
-        if acceptable is not None and len(prefs) == 1 and len(acceptable) > 1:
-            self._diff_acceptable(slot, acceptable, adds, removes)
-            return
-        if acceptable is not None and len(prefs) == 1:
-            # Fast path: one acceptable preference and nothing else.
-            value = acceptable[0].value
-            key = value if type(value) is not float else (float, value)
-            if key in wmes:
-                if len(wmes) > 1:
-                    for other in [k for k in wmes if k != key or type(k) is not type(key)]:
-                        removes.append(wmes.pop(other))
+        if len(prefs) == 1:
+            acceptable = prefs.get(ACCEPTABLE)
+            if acceptable is not None:
+                if len(acceptable) > 1:
+                    self._diff_acceptable(slot, acceptable, adds, removes)
+                    return
+                # Fast path: one acceptable preference and nothing else.
+                value = acceptable[0].value
+                key = value if type(value) is not float else (float, value)
+                if key in wmes:
+                    if len(wmes) > 1:
+                        for other in [k for k in wmes if k != key or type(k) is not type(key)]:
+                            removes.append(wmes.pop(other))
+                    return
+                if wmes:
+                    removes.extend(wmes.values())
+                    wmes.clear()
+                wmes[key] = None  # type: ignore[assignment]
+                adds.append((slot, key, value))
                 return
-            for other in list(wmes):
-                removes.append(wmes.pop(other))
-            wmes[key] = None  # type: ignore[assignment]
-            adds.append((slot, key, value))
-            return
+        acceptable = prefs.get(ACCEPTABLE)
         wanted: dict[object, Symbol] = {}
         if acceptable:
             for pref in acceptable:
@@ -1216,8 +1220,17 @@ class Agent:
         gone = [key for key in wmes if key not in present]
         for key in gone:
             removes.append(wmes.pop(key))
-        if len(present) == len(wmes):
+        missing = len(present) - len(wmes)
+        if missing == 0:
             return
+        if missing == 1:  # one new value (the usual case): no order to keep, usually the head
+            for pref in acceptable:
+                value = pref.value
+                key = value if type(value) is not float else (float, value)
+                if key not in wmes:
+                    wmes[key] = None  # type: ignore[assignment]
+                    adds.append((slot, key, value))
+                    return
         new: dict[object, Symbol] = {}
         for pref in acceptable:  # head first: a value's first occurrence is its newest
             value = pref.value
@@ -1756,26 +1769,27 @@ class Agent:
     # ------------------------------------------------------------- input
 
     def _apply_input_ops(self) -> None:
+        """Apply the queued input changes in order. A handle is queued when made and again
+        when removed: unremoved without a WME it is added; removed with a WME it goes
+        (removed before it was ever added, both entries are no-ops)."""
         ops, self._input_ops = self._input_ops, []
         add_wme = self._add_wme
         arch = self._arch
-        for op in ops:
-            if op[0] == "add":
-                _, handle, ident, attr, value = op
-                if handle.removed:
-                    continue
-                wme = add_wme(ident, attr, value)
-                bucket = arch.get(ident)
-                if bucket is None:
-                    arch[ident] = [wme]
-                else:
-                    bucket.append(wme)
-                handle.wme = wme
-            else:
-                _, handle = op
+        for handle in ops:
+            if handle.removed:
                 if handle.wme is not None:
                     self._remove_arch(handle.wme)
                     handle.wme = None
+                continue
+            if handle.wme is not None:
+                continue  # defensive: a live handle is added once
+            ident = handle.id
+            wme = handle.wme = add_wme(ident, handle.attr, handle.value)
+            bucket = arch.get(ident)
+            if bucket is None:
+                arch[ident] = [wme]
+            else:
+                bucket.append(wme)
 
     # ------------------------------------------------------------- output text
 

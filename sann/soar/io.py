@@ -39,7 +39,7 @@ class WMEHandle:
         agent = self._agent
         if self.wme is not None and self.wme.timetag not in agent._wm:
             return  # gone already (init() cleared working memory)
-        agent._input_ops.append(("remove", self))
+        agent._input_ops.append(self)
 
     def __repr__(self) -> str:
         return f"<input ({self.id} ^{self.attr} {self.value})>"
@@ -76,7 +76,7 @@ class InputHandle:
             ident = self.identifier
             handle = WMEHandle(agent, ident, attr, value)  # type: ignore[arg-type]
             self._children.append(handle)
-            agent._input_ops.append(("add", handle, ident, attr, value))
+            agent._input_ops.append(handle)
             return handle
         if value is _MISSING:
             ident = self._agent._new_id(attr, 1)
@@ -134,7 +134,7 @@ class InputHandle:
         agent = self._agent
         handle = WMEHandle(agent, self.identifier, attr, value)
         self._children.append(handle)
-        agent._input_ops.append(("add", handle, self.identifier, attr, value))
+        agent._input_ops.append(handle)
         return handle
 
     def _check_live(self) -> None:
