@@ -903,15 +903,19 @@ class Agent:
         return Preference(ptype, ident, attr, value, referent, inst)
 
     def _retract(self, inst: Instantiation) -> None:
+        """Remove an instantiation's i-supported preferences (o-supported ones stay)."""
+        trace = self.trace_level
+        remove = self._remove_preference
         removed = False
         for pref in inst.prefs:
             if pref.live and not pref.o_supported:
-                if not removed and self.trace_level >= 3:
-                    self._emit(f"\nRetracting {inst.name}\n")
+                if trace >= 3:
+                    if not removed:
+                        self._emit(f"\nRetracting {inst.name}\n")
+                    if trace >= 5:
+                        self._emit("\n -" + trace_preference(pref))
                 removed = True
-                if self.trace_level >= 5:
-                    self._emit("\n -" + trace_preference(pref))
-                self._remove_preference(pref)
+                remove(pref)
         if inst.goal.level > 1 and not any(p.live for p in inst.prefs):
             inst.goal.insts.discard(inst)
         if inst.is_justification:
