@@ -652,7 +652,7 @@ class _AlphaMemory:
         self._relink()
 
     def _relink(self) -> None:
-        self.activations = [(node.right_activate, node.parent.tokens)  # type: ignore[union-attr]
+        self.activations = [(node.activation(self), node.parent.tokens)  # type: ignore[union-attr]
                             for node in self.successors]
 
     def index(self, field: str) -> dict:
@@ -745,6 +745,10 @@ class _Node:
 
     def all_tokens(self) -> list[_Token]:
         return list(self.tokens)
+
+    def activation(self, amem: _AlphaMemory) -> Callable[[WME], None]:
+        """What a WME entering ``amem`` calls (a join or negative node: right_activate)."""
+        return self.right_activate  # type: ignore[attr-defined]
 
     def left_activate(self, tok: _Token) -> None:  # the root has no parent
         raise AssertionError("the root node is never activated")
@@ -1264,6 +1268,93 @@ class _QueryNCCNode(_Node):
                     self._block(tok, found)
 
 
+def _compile_filter_run(members: list[tuple], seed: int) -> Callable[[tuple, WME | None], list]:
+    """Every combination of WMEs passing a run of filters given a token's values, as nested
+    loops; member ``seed`` (if any) may only match the WME passed in (it was just added)."""
+    namespace: dict[str, object] = {"FLOAT": _FLOAT, "same": same_symbol}
+    lines = ["def combos(vals, seed):", "    out = []"]
+    depth = 1
+    for k, (_, index, pos, getter, check) in enumerate(members):
+        pad = "    " * depth
+        namespace.update({f"I{k}": index, f"G{k}": getter, f"C{k}": check})
+        if k == seed:
+            lines.append(f"{pad}b{k} = (seed,) if same(vals[{pos}], G{k}(seed)) else ()")
+        else:
+            lines.append(f"{pad}key = vals[{pos}]")
+            lines.append(f"{pad}if key.__class__ is float: key = (FLOAT, key)")
+            lines.append(f"{pad}b{k} = I{k}.get(key, ())")
+        lines.append(f"{pad}for w{k} in b{k}:")
+        if check is not None:
+            lines.append(f"{pad}    if not C{k}(vals, w{k}): continue")
+        depth += 1
+    pad = "    " * depth
+    lines.append(f"{pad}out.append(({''.join(f'w{k}, ' for k in range(len(members)))}))")
+    lines.append("    return out")
+    exec("\n".join(lines), namespace)  # noqa: S102 -- generated from our own plans only
+    return namespace["combos"]  # type: ignore[return-value]
+
+
+class _FilterRunNode(_Node):
+    """Consecutive positive conditions that bind nothing (``(<c> ^zmax > <zl>)`` after
+    ``<c>`` and ``<zl>`` are bound), joined as one node.
+
+    Each filter only tests values the parent token already has, so they are independent of
+    one another: one token per combination of passing WMEs (``tok[1]`` is the tuple of
+    them), instead of a chain of nodes whose tokens mostly die a level or two further down.
+    In the block planner's geometry rules every pair of blocks goes through six such
+    tests; as a chain they made three tokens per pair."""
+
+    __slots__ = ("members", "amems", "combos", "registry")
+
+    def __init__(self, rete: Rete, parent: _Node, key: object, members: list[tuple]) -> None:
+        super().__init__(rete, parent, key)
+        # per filter: (alpha memory, its hash index, parent value position, getter, check)
+        self.members = members
+        self.amems = [member[0] for member in members]
+        self.registry = rete._wme_info
+        # combos[0]: every combination; combos[k + 1]: those with filter k matching a WME
+        self.combos = [_compile_filter_run(members, seed) for seed in range(-1, len(members))]
+        for _, _, pos, _, _ in members:
+            parent.index(pos)
+
+    def activation(self, amem: _AlphaMemory) -> Callable[[WME], None]:
+        k = self.amems.index(amem)
+        seeded = self.combos[k + 1]
+        parent_index = self.parent.index(self.members[k][2])  # type: ignore[union-attr]
+        getter = self.members[k][3]
+
+        def right_activate(wme: WME) -> None:
+            key = getter(wme)
+            if key.__class__ is float:
+                key = (_FLOAT, key)
+            bucket = parent_index.get(key)
+            if bucket:
+                for t in list(bucket):
+                    self._make(t, seeded(t[2], wme))
+
+        return right_activate
+
+    def left_activate(self, t: _Token) -> None:
+        self._make(t, self.combos[0](t[2], None))
+
+    def _make(self, t: _Token, found: list[tuple]) -> None:
+        registry = self.registry
+        for wmes in found:
+            tok = _Token((t, wmes, t[2], self, None, None))
+            _adopt(t, tok)
+            for wme in wmes:
+                registry[wme][1][tok] = None
+            self.store(tok)
+
+    def forget(self, tok: _Token) -> None:
+        _Node.forget(self, tok)
+        registry = self.registry
+        for wme in tok[1]:
+            record = registry.get(wme)
+            if record is not None:
+                record[1].pop(tok, None)
+
+
 class _ProductionNode(_Node):
     """Bottom of a production: each token is a Match."""
 
@@ -1300,16 +1391,23 @@ class _ProductionNode(_Node):
 class _Layout:
     """Where a production's WMEs and variables sit in its tokens."""
 
-    __slots__ = ("order", "bindings")
+    __slots__ = ("levels", "size", "bindings")
 
-    def __init__(self, order: list[int], bindings: list[tuple[str, int]]) -> None:
-        self.order = order  # order[level] = written index of the element at that level
+    def __init__(self, levels: list[tuple[int, ...]], bindings: list[tuple[str, int]]) -> None:
+        # levels[k] = written indices of the elements matched at token level k: one, or
+        # several for a run of filters (whose token holds a tuple of WMEs)
+        self.levels = levels[::-1]
+        self.size = sum(len(level) for level in levels)
         self.bindings = bindings
 
     def wmes_of(self, tok: _Token) -> tuple[WME | None, ...]:
-        out: list[WME | None] = [None] * len(self.order)
-        for index in reversed(self.order):
-            out[index] = tok[1]
+        out: list[WME | None] = [None] * self.size
+        for level in self.levels:
+            if len(level) == 1:
+                out[level[0]] = tok[1]
+            else:
+                for index, wme in zip(level, tok[1], strict=True):
+                    out[index] = wme
             tok = tok[0]
         return tuple(out)
 
@@ -1771,9 +1869,9 @@ class Rete:
         conditions = production.conditions
         scope = _bound_by(conditions)
         var_pos: dict[str, int] = {}
-        bottom, order = self._build_scope(conditions, self._root, var_pos, 0, scope,
-                                          _singletons(production), set())
-        layout = _Layout(order, sorted((n, p) for n, p in var_pos.items() if n in scope))
+        bottom, levels = self._build_scope(conditions, self._root, var_pos, 0, scope,
+                                           _singletons(production), set(), filter_runs=True)
+        layout = _Layout(levels, sorted((n, p) for n, p in var_pos.items() if n in scope))
         pnode = _ProductionNode(self, bottom, production, layout)
         bottom.children.append(pnode)
         self._pnodes[production.name] = pnode
@@ -1985,20 +2083,42 @@ class Rete:
 
     def _build_scope(self, elements: tuple[ConditionElement, ...], parent: _Node,
                      var_pos: dict[str, int], nvals: int, scope: set[str],
-                     singletons: set[str], states: set[str]) -> tuple[_Node, list[int]]:
+                     singletons: set[str], states: set[str], filter_runs: bool = False
+                     ) -> tuple[_Node, list[tuple[int, ...]]]:
+        """Build the nodes of ``elements`` below ``parent``; return the bottom node and the
+        written indices matched at each token level.  ``filter_runs``: join consecutive
+        filters as one node (not inside an NCC subnetwork, whose partner counts levels)."""
         order = _join_order(elements, var_pos, scope, singletons, self._volatile)
         deferred: list[tuple[int, str, str]] = []
         node = parent
+        levels: list[tuple[int, ...]] = []
+        run: list[tuple[int, _Plan, _AlphaMemory]] = []  # filters waiting to be joined
+
+        def close_run() -> None:
+            nonlocal node
+            if run:
+                node = self._filter_node(node, run)
+                levels.append(tuple(index for index, _, _ in run))
+                run.clear()
+
         for index in order:
             element = elements[index]
             if isinstance(element, ConjunctiveNegation):
+                close_run()
                 node = self._build_ncc(element, node, dict(var_pos), nvals, scope, singletons,
                                        set(states))
+                levels.append((index,))
                 continue
             plan = _plan_condition(element, var_pos, nvals, deferred, states)
             if element.goal is not None and not element.negated:
                 states.update(equality_vars(element.id_test))
             amem = self._alpha_memory(plan)
+            if (filter_runs and not element.negated and not plan.new_fields
+                    and plan.index is not None and all(a is not amem for _, _, a in run)):
+                run.append((index, plan, amem))
+                continue
+            close_run()
+            levels.append((index,))
             check = _compile_check(plan.beta)
             if element.negated:
                 key = ("neg", id(amem), plan.index, tuple(plan.beta))
@@ -2010,9 +2130,32 @@ class Rete:
                 node = self._child(node, key, lambda p, k, a=amem, pl=plan, c=check, f=fields:
                                    _JoinNode(self, p, k, a, pl.index, c, _extender(f)), amem)
                 nvals += len(fields)
+        close_run()
         if deferred:  # unreachable after check_production; kept as a loud guard
             raise AssertionError(f"relational tests never placed: {deferred}")
-        return node, order
+        return node, levels
+
+    def _filter_node(self, parent: _Node, run: list[tuple[int, _Plan, _AlphaMemory]]) -> _Node:
+        """A lone filter is an ordinary join node; two or more make a _FilterRunNode."""
+        if len(run) == 1:
+            _, plan, amem = run[0]
+            key = ("join", id(amem), plan.index, tuple(plan.beta), ())
+            return self._child(parent, key, lambda p, k: _JoinNode(
+                self, p, k, amem, plan.index, _compile_check(plan.beta), None), amem)
+        key = ("filters", tuple((id(amem), plan.index, tuple(plan.beta)) for _, plan, amem in run))
+        node = parent.child_map.get(key)
+        if node is not None:
+            return node
+        members = [(amem, amem.index(plan.index[1]), plan.index[0], _GET[plan.index[1]],
+                    _compile_check(plan.beta)) for _, plan, amem in run]  # type: ignore[index]
+        node = _FilterRunNode(self, parent, key, members)
+        parent.children.append(node)
+        parent.child_map[key] = node
+        for _, _, amem in run:
+            amem.link(node)
+        for tok in list(parent.tokens):
+            node.left_activate(tok)
+        return node
 
     def _child(self, parent: _Node, key: tuple, make: Callable, amem: _AlphaMemory) -> _Node:
         node = parent.child_map.get(key)
@@ -2120,6 +2263,11 @@ class Rete:
             amem.unlink(node)
             if not amem.successors and not amem.listeners:
                 self._drop_alpha_memory(amem)
+        if isinstance(node, _FilterRunNode):
+            for amem in node.amems:
+                amem.unlink(node)
+                if not amem.successors and not amem.listeners and amem.key in self._amems:
+                    self._drop_alpha_memory(amem)
         if isinstance(node, _QueryNCCNode):
             for k, amem in enumerate(node.amems):
                 amem.listeners.remove((node, k))

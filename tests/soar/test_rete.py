@@ -315,6 +315,52 @@ def test_ncc_inner_negation_invalidates_and_restores_witnesses(world: World) -> 
     assert world.values("r", "n") == ["u", "v"]
 
 
+def test_filter_runs_match_in_any_arrival_order(world: World) -> None:
+    """Consecutive tests that bind nothing (one node in the Rete) give one match per
+    combination of WMEs, whichever arrives first, and lose it when any of them goes."""
+    a, b = world.new(), world.new()
+    world.rule("(state <s> ^pair <p>) (<p> ^left <a> ^right <b>)"
+               " (<a> ^x <xa>) (<b> ^x > <xa>) (<b> ^y < <xa>) (<a> ^tag <t>) (<b> ^tag <t>)")
+    pair = world.new("P")
+    world.add(world.s1, "pair", pair)
+    world.add(pair, "left", a)
+    world.add(pair, "right", b)
+    world.add(a, "x", 5)
+    b_y = world.add(b, "y", 1)
+    world.add(a, "tag", "red")
+    assert world.bindings() == []
+    world.add(b, "tag", "red")
+    b_x = world.add(b, "x", 7)
+    assert len(world.m.matches("r")) == 1
+    world.add(b, "y", 2)  # a second WME passing one filter: a second combination
+    assert len(world.m.matches("r")) == 2
+    world.m.remove_wme(b_y)
+    assert len(world.m.matches("r")) == 1
+    world.m.remove_wme(b_x)
+    assert world.bindings() == []
+    world.add(b, "x", 4)  # fails ^x > 5
+    assert world.bindings() == []
+
+
+def test_filter_run_node_is_shared_and_removed() -> None:
+    rete = Rete()
+    text = "(state <s> ^block <b>) (<b> ^size 2) (<b> ^color red) (<s> ^mode go)"
+    rete.add_production(parse_production(f"sp {{one {text} --> (write x)}}"))
+    rete.add_production(parse_production(f"sp {{two {text} --> (write y)}}"))
+    s1, b = Identifier("S", 1, level=1), Identifier("B", 1)
+    for t, wme in enumerate([(s1, "block", b), (b, "size", 2), (b, "color", "red"),
+                             (s1, "mode", "go")]):
+        rete.add_wme(WME(*wme, t))  # type: ignore[arg-type]
+    runs = [n for n in _nodes(rete) if type(n).__name__ == "_FilterRunNode"]
+    assert len(runs) == 1 and len(rete.matches("one")) == len(rete.matches("two")) == 1
+    (match,) = rete.matches("one")
+    assert [w.attr for w in match.wmes] == ["block", "size", "color", "mode"]
+    rete.excise("one")
+    rete.excise("two")
+    assert _node_count(rete) == 1 and rete._amems == {}
+    assert all(info[0] == [] and not info[1] for info in rete._wme_info.values())
+
+
 def test_query_ncc_cleans_up_on_excise() -> None:
     rete = Rete()
     s1 = Identifier("S", 1, level=1)
@@ -483,13 +529,17 @@ def test_unlinked_conditions_can_be_allowed(matcher: type) -> None:
 # ----- Rete structure -------------------------------------------------------------------------
 
 
-def _node_count(rete: Rete) -> int:
-    count, stack = 0, [rete._root]
+def _nodes(rete: Rete) -> list:
+    found, stack = [], [rete._root]
     while stack:
         node = stack.pop()
-        count += 1
+        found.append(node)
         stack.extend(node.children)
-    return count
+    return found
+
+
+def _node_count(rete: Rete) -> int:
+    return len(_nodes(rete))
 
 
 def test_shared_prefix_and_alpha_memories() -> None:
@@ -578,7 +628,7 @@ def test_volatile_checks_join_last() -> None:
     (match,) = rete.matches("use")
     assert match.wmes[0] is flag
     pnode = rete._pnodes["use"]
-    assert pnode.layout.order[-1] == 0  # the ^flag check is the last join
+    assert pnode.layout.levels[0][-1] == 0  # the ^flag check is joined last
     rete.remove_wme(flag)
     assert rete.matches("use") == []
 
@@ -591,12 +641,12 @@ def test_rebuild_after_an_attribute_turns_volatile_keeps_matches() -> None:
     rete.add_production(parse_production(
         "sp {use (state <s> ^flag on ^block <b>) (<b> ^size 1) --> (write x)}"))
     (match,) = rete.take_changes()[0]
-    assert rete._pnodes["use"].layout.order[0] == 0  # ^flag is not known to change yet
+    assert rete._pnodes["use"].layout.levels[-1][0] == 0  # ^flag is not known to change yet
     rete.add_production(parse_production(
         "sp {flip (state <s> ^flag on) --> (<s> ^flag on - off)}"))
     added, removed = rete.take_changes()
     assert removed == [] and [m.production.name for m in added] == ["flip"]
-    assert rete._pnodes["use"].layout.order[-1] == 0  # rebuilt: ^flag joins last
+    assert rete._pnodes["use"].layout.levels[0][-1] == 0  # rebuilt: ^flag joins last
     assert rete.matches("use") == [match]
     assert match.bindings == {"s": s1, "b": block}
     (flip,) = rete.matches("flip")
