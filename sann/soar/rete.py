@@ -1077,6 +1077,18 @@ class _PartnerNode(_Node):
             self.ncc.release(owner, result)
 
 
+def _bucket_lines(k: int, pad: str, vals: str, pos: int, seeded: bool) -> list[str]:
+    """Generated code: ``b<k>`` = the WMEs of condition ``k`` hashed on ``vals[pos]`` (its
+    alpha memory ``W<k>`` when ``pos`` < 0), or just the seed WME when it fits."""
+    if seeded:
+        test = f"same({vals}[{pos}], G{k}(seed))" if pos >= 0 else "True"
+        return [f"{pad}b{k} = (seed,) if {test} else ()"]
+    if pos < 0:
+        return [f"{pad}b{k} = W{k}"]
+    return [f"{pad}key = {vals}[{pos}]", f"{pad}if key.__class__ is float: key = (FLOAT, key)",
+            f"{pad}b{k} = I{k}.get(key, ())"]
+
+
 def _compile_query(levels: list[tuple], seed: int) -> Callable[[tuple, WME | None], tuple | None]:
     """A search for one match of a query NCC's inner conditions as nested loops, one per
     condition (a negated one as ``for ... break / else``), with condition ``seed`` (if
@@ -1090,15 +1102,7 @@ def _compile_query(levels: list[tuple], seed: int) -> Callable[[tuple, WME | Non
     for k, (wmes, index, pos, getter, check, fields, negated) in enumerate(levels):
         pad = "    " * depth
         namespace.update({f"W{k}": wmes, f"I{k}": index, f"G{k}": getter, f"C{k}": check})
-        if k == seed:
-            test = f"same(v{k}[{pos}], G{k}(seed))" if pos >= 0 else "True"
-            lines.append(f"{pad}b{k} = (seed,) if {test} else ()")
-        elif pos >= 0:
-            lines.append(f"{pad}key = v{k}[{pos}]")
-            lines.append(f"{pad}if key.__class__ is float: key = (FLOAT, key)")
-            lines.append(f"{pad}b{k} = I{k}.get(key, ())")
-        else:
-            lines.append(f"{pad}b{k} = W{k}")
+        lines += _bucket_lines(k, pad, f"v{k}", pos, k == seed)
         lines.append(f"{pad}for w{k} in b{k}:")
         inner = pad + "    "
         if negated:
@@ -1277,12 +1281,7 @@ def _compile_filter_run(members: list[tuple], seed: int) -> Callable[[tuple, WME
     for k, (_, index, pos, getter, check) in enumerate(members):
         pad = "    " * depth
         namespace.update({f"I{k}": index, f"G{k}": getter, f"C{k}": check})
-        if k == seed:
-            lines.append(f"{pad}b{k} = (seed,) if same(vals[{pos}], G{k}(seed)) else ()")
-        else:
-            lines.append(f"{pad}key = vals[{pos}]")
-            lines.append(f"{pad}if key.__class__ is float: key = (FLOAT, key)")
-            lines.append(f"{pad}b{k} = I{k}.get(key, ())")
+        lines += _bucket_lines(k, pad, "vals", pos, k == seed)
         lines.append(f"{pad}for w{k} in b{k}:")
         if check is not None:
             lines.append(f"{pad}    if not C{k}(vals, w{k}): continue")
