@@ -1077,6 +1077,13 @@ class _PartnerNode(_Node):
             self.ncc.release(owner, result)
 
 
+def _define(lines: list[str], namespace: dict[str, object], name: str) -> Callable:
+    """Compile generated source (built from the Rete's own plans, never from rule text as
+    code) and return the function it defines."""
+    exec("\n".join(lines), namespace)  # noqa: S102 -- generated from our own plans only
+    return namespace[name]  # type: ignore[return-value]
+
+
 def _bucket_lines(k: int, pad: str, vals: str, pos: int, seeded: bool) -> list[str]:
     """Generated code: ``b<k>`` = the WMEs of condition ``k`` hashed on ``vals[pos]`` (its
     alpha memory ``W<k>`` when ``pos`` < 0), or just the seed WME when it fits."""
@@ -1120,8 +1127,7 @@ def _compile_query(levels: list[tuple], seed: int) -> Callable[[tuple, WME | Non
     pad = "    " * depth
     lines.append(f"{pad}return v{len(levels)}, ({''.join(w + ', ' for w in matched)})")
     lines.append("    return None")
-    exec("\n".join(lines), namespace)  # noqa: S102 -- generated from our own plans only
-    return namespace["solve"]  # type: ignore[return-value]
+    return _define(lines, namespace, "solve")
 
 
 class _QueryNCCNode(_Node):
@@ -1289,8 +1295,7 @@ def _compile_filter_run(members: list[tuple], seed: int) -> Callable[[tuple, WME
     pad = "    " * depth
     lines.append(f"{pad}out.append(({''.join(f'w{k}, ' for k in range(len(members)))}))")
     lines.append("    return out")
-    exec("\n".join(lines), namespace)  # noqa: S102 -- generated from our own plans only
-    return namespace["combos"]  # type: ignore[return-value]
+    return _define(lines, namespace, "combos")
 
 
 class _FilterRunNode(_Node):
@@ -1467,8 +1472,7 @@ def _compile_alpha(specs: list[tuple]) -> Callable[[WME], bool] | None:
             namespace[f"d{n}"] = frozenset(spec[2])
             lines.append(f"    if (x.__class__.__name__, x) not in d{n}: return False")
     lines.append("    return True")
-    exec("\n".join(lines), namespace)  # noqa: S102 -- generated from our own specs only
-    return namespace["accept"]  # type: ignore[return-value]
+    return _define(lines, namespace, "accept")
 
 
 _NUMBERS = frozenset((int, float))
@@ -1504,8 +1508,7 @@ def _compile_check(specs: list[BetaSpec]) -> Callable[[tuple, WME], bool] | None
             raise AssertionError(f"unknown relation {op!r}")
     lines.append("    return True")
     namespace: dict[str, object] = {"NUMBERS": _NUMBERS, "RELATIONS": _RELATIONS}
-    exec("\n".join(lines), namespace)  # noqa: S102 -- generated from our own specs only
-    return namespace["check"]  # type: ignore[return-value]
+    return _define(lines, namespace, "check")
 
 
 def _EXTEND_VALUE(vals: tuple, w: WME) -> tuple:  # noqa: N802 -- a marker as much as a function
