@@ -29,20 +29,18 @@ from .goals import Goal
 from .instantiation import (
     Instantiation,
     ProductionInfo,
+    compile_actions,
     is_o_supported,
     match_goal,
     tested_operators,
 )
 from .io import InputHandle, OutputHandle, WMEHandle
 from .memory import WME, Identifier, IdentifierFactory, Symbol
-from .preferences import ACCEPTABLE, PROHIBIT, REJECT, REQUIRE, Preference, Slot, preference_type
+from .preferences import ACCEPTABLE, PROHIBIT, REJECT, REQUIRE, Preference, Slot
 from .production import (
-    CallAction,
     Command,
     Condition,
     Const,
-    FuncCall,
-    MakeAction,
     Production,
     Var,
 )
@@ -792,115 +790,26 @@ class Agent:
         if self.trace_level >= 3:
             self._emit(f"\nFiring {name}\n")
         self._inst_of[match] = inst
-        bindings = match.bindings  # type: ignore[attr-defined]
-        binds = info.rhs_binds
-        if binds is None:
-            binds = info.rhs_binds = all(var in bindings for var in info.rhs_vars)
-        if not binds:
-            bindings = dict(bindings)  # new identifiers are bound for this firing only
         operators = (
             tested_operators(info, inst.wmes, goal.id)
             if o_support and info.declared != "o-support"
             else ()
         )
-        prefs = inst.prefs
-        for action, id_name, attr, constant, value, ptype in info.steps:
-            if id_name is not None:
-                # (<id> ^attr value) on a bound identifier: no general evaluation needed.
-                ident = bindings.get(id_name)
-                if type(ident) is Identifier:
-                    if not constant:
-                        name = value
-                        value = bindings.get(name)  # type: ignore[arg-type]
-                        if value is None:  # an unbound variable names a new identifier
-                            value = bindings[name] = self._new_id(name, goal.level)  # type: ignore[arg-type]
-                    pref = Preference(ptype, ident, attr, value, None, inst)
-                    if o_support and ident not in operators:
-                        pref.o_supported = True
-                    prefs.append(pref)
-                    continue
-            pref = self._evaluate_action(action, bindings, inst)
-            if pref is not None:
-                # Identifiers compare by identity, and never equal a constant.
-                if o_support and pref.id not in operators:
-                    pref.o_supported = True
-                prefs.append(pref)
+        bindings = match.bindings  # type: ignore[attr-defined]
+        program = info.program
+        if program is None:
+            program = info.program = compile_actions(name, info.actions, frozenset(bindings))
+        program(self, bindings, inst, o_support, operators)
         if goal.level > 1:
             goal.insts.add(inst)
             self._handle_substate_preferences(inst)
         return inst
 
-    def _evaluate_action(
-        self, action: MakeAction | CallAction, bindings: dict[str, Symbol], inst: Instantiation
-    ) -> Preference | None:
-        """The general evaluation of an action; like the kernel, an RHS error is reported
-        and drops this action only."""
-        try:
-            if type(action) is MakeAction:
-                return self._make_preference(action, bindings, inst)
-            self._call(action.call, bindings, inst)  # type: ignore[union-attr]
-        except SoarError as error:
-            message = f"Error: production {inst.name}: {error}"
-            self.errors.append(message)
-            self._emit("\n" + message + "\n")
-        return None
-
-    def _value(self, value: object, bindings: dict[str, Symbol], inst: Instantiation) -> Symbol:
-        kind = type(value)
-        if kind is Var:
-            bound = bindings.get(value.name)  # type: ignore[attr-defined]
-            if bound is None:
-                bound = self._new_id(value.name, inst.goal.level)  # type: ignore[attr-defined]
-                bindings[value.name] = bound  # type: ignore[attr-defined]
-            return bound
-        if kind is Const:
-            return value.value  # type: ignore[attr-defined]
-        if kind is FuncCall:
-            result = self._call(value, bindings, inst)
-            if result is None:
-                raise SoarRuntimeError(f"({value.name}) returns no value")
-            return result
-        raise SoarRuntimeError(f"cannot evaluate {value!r}")
-
-    def _call(
-        self, call: FuncCall, bindings: dict[str, Symbol], inst: Instantiation
-    ) -> Symbol | None:
-        function = FUNCTIONS.get(call.name)
-        if function is None:
-            raise SoarRuntimeError(f"unknown RHS function ({call.name})")
-        args = [self._value(arg, bindings, inst) for arg in call.args]
-        return function(self, args)
-
-    def _make_preference(
-        self, action: MakeAction, bindings: dict[str, Symbol], inst: Instantiation
-    ) -> Preference | None:
-        ident = bindings.get(action.id.name)
-        if ident is None:
-            ident = self._value(action.id, bindings, inst)
-        attr = action.attr
-        attr = attr.value if type(attr) is Const else self._value(attr, bindings, inst)
-        value = action.value
-        kind = type(value)
-        if kind is Const:
-            value = value.value
-        elif kind is Var:
-            bound = bindings.get(value.name)
-            value = bound if bound is not None else self._value(value, bindings, inst)
-        else:
-            value = self._value(value, bindings, inst)
-        referent = None
-        if action.referent is not None:
-            referent = self._value(action.referent, bindings, inst)
-        if type(ident) is not Identifier:
-            self._emit(
-                f"\nError: production {inst.name} makes a preference for a non-identifier"
-                f" {format_value(ident)}; action ignored."
-            )
-            return None
-        ptype = action.preference
-        if referent is not None:
-            ptype = preference_type(ptype, referent)
-        return Preference(ptype, ident, attr, value, referent, inst)
+    def _report_rhs_error(self, inst: Instantiation, error: SoarError) -> None:
+        """Like the kernel: report an action's error; the firing goes on without it."""
+        message = f"Error: production {inst.name}: {error}"
+        self.errors.append(message)
+        self._emit("\n" + message + "\n")
 
     def _retract(self, inst: Instantiation) -> None:
         """Remove an instantiation's i-supported preferences (o-supported ones stay)."""

@@ -13,15 +13,22 @@ working memory.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Container, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from .errors import SoarError, SoarRuntimeError
 from .memory import WME, Identifier
+from .preferences import Preference, preference_type
 from .production import CallAction, Const, FuncCall, MakeAction, Production, RhsValue, Var
+from .rhs import FUNCTIONS, format_value
 
 if TYPE_CHECKING:
     from .goals import Goal
-    from .preferences import Preference
+
+#: A production's compiled right-hand side: ``program(agent, bindings, inst, o_support,
+#: operators)`` appends the instantiation's preferences (see `compile_actions`).
+RhsProgram = Callable[[object, dict, "Instantiation", bool, Sequence[object]], None]
 
 
 @dataclass
@@ -43,18 +50,8 @@ class ProductionInfo:
     #: Per top-level condition: 2 if its attribute test is a constant, +4 if its value test
     #: is; the kernel's alpha-memory order when one WME makes several matches.
     cond_masks: tuple[int, ...] = ()
-    #: Variables used on the right-hand side; ``rhs_binds`` says, once the first match has
-    #: shown which variables the left-hand side binds, whether firing creates identifiers
-    #: (and so needs its own copy of the match's bindings).
-    rhs_vars: tuple[str, ...] = ()
-    rhs_binds: bool | None = None
-    #: Per action, the common make-action shape ``(<id> ^const value)`` without referent as
-    #: ``(id name, attr, value is a constant, constant or variable name, preference)`` so
-    #: firing can skip the general evaluator; ``None`` for any other action.
-    plans: tuple[tuple[str, object, bool, object, str] | None, ...] = ()
-    #: Per action, what firing walks: ``(action, id name, attr, value is a constant,
-    #: constant or variable name, preference)`` from its plan, or ``(action, None, ...)``.
-    steps: tuple[tuple[MakeAction | CallAction, str | None, object, bool, object, str], ...] = ()
+    #: The compiled right-hand side, made at the first firing (`compile_actions`).
+    program: RhsProgram | None = None
 
     @classmethod
     def of(cls, production: Production) -> ProductionInfo:
@@ -80,17 +77,6 @@ class ProductionInfo:
             | (4 if type(getattr(cond, "value_test", None)) is Const else 0)
             for cond in production.conditions
         )
-        rhs_vars: dict[str, None] = {}
-        for action in production.actions:
-            values = (
-                (action.id, action.attr, action.value, action.referent)
-                if isinstance(action, MakeAction)
-                else (action.call,)
-            )
-            for value in values:
-                if value is not None:
-                    rhs_vars.update(dict.fromkeys(variables_in(value)))
-        plans = tuple(_action_plan(action) for action in production.actions)
         return cls(
             production,
             tuple(indexes),
@@ -98,27 +84,127 @@ class ProductionInfo:
             production.actions,
             make_ids,
             cond_masks=masks,
-            rhs_vars=tuple(rhs_vars),
-            plans=plans,
-            steps=tuple(
-                (action, *(plan or (None, None, False, None, "")))
-                for action, plan in zip(production.actions, plans, strict=True)
-            ),
         )
 
 
-def _action_plan(action: MakeAction | CallAction) -> tuple[str, object, bool, object, str] | None:
-    """The fast firing form of a make-action with a constant attribute (see ``plans``)."""
-    if type(action) is not MakeAction or action.referent is not None:
-        return None
-    if type(action.id) is not Var or type(action.attr) is not Const:
-        return None
-    value = action.value
-    if type(value) is Const:
-        return (action.id.name, action.attr.value, True, value.value, action.preference)
-    if type(value) is Var:
-        return (action.id.name, action.attr.value, False, value.name, action.preference)
-    return None
+def compile_actions(
+    name: str, actions: Sequence[MakeAction | CallAction], bound: Container[str] = ()
+) -> RhsProgram:
+    """Compile a production's actions into one Python function.
+
+    Interpreting the actions cost more than anything else in firing; the compiled form
+    does the same steps in the same order: per make-action the identifier, attribute,
+    value and referent are evaluated (an unbound variable becomes a new identifier at its
+    first evaluation, named after the variable), then a preference is made unless the
+    identifier is not one (an error line, as in the kernel). A `SoarError` in an action is
+    reported by the agent (``_report_rhs_error``) and drops that action only.
+
+    ``bound`` names the variables every match binds (the left-hand side's: the same for
+    all matches of a production); reading them needs no check for a new identifier."""
+    return _RhsCompiler(name, bound).build(actions)
+
+
+class _RhsCompiler:
+    """Generates the source of `compile_actions`'s function, straight-line per action so
+    that evaluation order (and so identifier numbering and output) is the interpreter's."""
+
+    def __init__(self, name: str, bound: Container[str]) -> None:
+        self.name = name
+        self.bound = bound
+        self.namespace: dict[str, object] = {
+            "Preference": Preference,
+            "Identifier": Identifier,
+            "SoarError": SoarError,
+            "SoarRuntimeError": SoarRuntimeError,
+            "preference_type": preference_type,
+            "format_value": format_value,
+        }
+        self.locals: dict[str, str] = {}  # variable name -> local holding its value
+        self.temps = 0
+
+    def build(self, actions: Sequence[MakeAction | CallAction]) -> RhsProgram:
+        body: list[str] = []
+        for action in actions:
+            body.append("    try:")
+            if type(action) is MakeAction:
+                self._make(action, body)
+            else:
+                self._call(action.call, body, "        ", check=False)  # type: ignore[union-attr]
+            body.append("    except SoarError as error:")
+            body.append("        agent._report_rhs_error(inst, error)")
+        head = [
+            "def program(agent, b, inst, o_support, operators):",
+            "    append = inst.prefs.append",
+            "    level = inst.goal.level",
+            "    new_id = agent._new_id",
+        ]
+        for var, local in self.locals.items():
+            reader = "b[{}]" if var in self.bound else "b.get({})"
+            head.append(f"    {local} = {reader.format(self._const(var))}")
+        source = "\n".join(head + body) + "\n"
+        exec(compile(source, f"<actions of {self.name}>", "exec"), self.namespace)
+        return self.namespace["program"]  # type: ignore[return-value]
+
+    def _const(self, value: object) -> str:
+        key = f"K{len(self.namespace)}"
+        self.namespace[key] = value
+        return key
+
+    def _make(self, action: MakeAction, out: list[str]) -> None:
+        ind = "        "
+        ident = self._value(action.id, out, ind)
+        attr = self._value(action.attr, out, ind)
+        value = self._value(action.value, out, ind)
+        ptype = self._const(action.preference)
+        referent = "None"
+        if action.referent is not None:
+            referent = self._value(action.referent, out, ind)
+            ptype = f"preference_type({ptype}, {referent})"
+        out += [
+            f"{ind}if type({ident}) is not Identifier:",
+            f"{ind}    agent._emit('\\nError: production ' + inst.name + ' makes a preference"
+            f" for a non-identifier ' + format_value({ident}) + '; action ignored.')",
+            f"{ind}else:",
+            f"{ind}    p = Preference({ptype}, {ident}, {attr}, {value}, {referent}, inst)",
+            f"{ind}    if o_support and {ident} not in operators:",
+            f"{ind}        p.o_supported = True",
+            f"{ind}    append(p)",
+        ]
+
+    def _value(self, node: RhsValue, out: list[str], ind: str) -> str:
+        """An expression naming the node's value, after the statements that compute it."""
+        kind = type(node)
+        if kind is Var:
+            local = self.locals.get(node.name)  # type: ignore[union-attr]
+            if local is None:
+                local = self.locals[node.name] = f"v{len(self.locals)}"  # type: ignore[union-attr]
+            if node.name not in self.bound:  # type: ignore[union-attr]
+                out.append(f"{ind}if {local} is None:")
+                out.append(f"{ind}    {local} = new_id({self._const(node.name)}, level)")  # type: ignore[union-attr]
+            return local
+        if kind is Const:
+            return self._const(node.value)  # type: ignore[union-attr]
+        if kind is FuncCall:
+            return self._call(node, out, ind, check=True)  # type: ignore[arg-type]
+        out.append(f"{ind}raise SoarRuntimeError({self._const(f'cannot evaluate {node!r}')})")
+        return "None"
+
+    def _call(self, call: FuncCall, out: list[str], ind: str, check: bool) -> str:
+        """A function call; as a value (``check``) it must return one."""
+        function = FUNCTIONS.get(call.name)
+        if function is None:
+            message = f"unknown RHS function ({call.name})"
+            out.append(f"{ind}raise SoarRuntimeError({self._const(message)})")
+            return "None"
+        args = [self._value(arg, out, ind) for arg in call.args]
+        temp = f"t{self.temps}"
+        self.temps += 1
+        out.append(f"{ind}{temp} = {self._const(function)}(agent, [{', '.join(args)}])")
+        if check:
+            message = f"({call.name}) returns no value"
+            out.append(f"{ind}if {temp} is None:")
+            out.append(f"{ind}    raise SoarRuntimeError({self._const(message)})")
+        return temp
 
 
 class Instantiation:
