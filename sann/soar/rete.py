@@ -1278,13 +1278,25 @@ class _QueryNCCNode(_Node):
                     self._block(tok, found)
 
 
-def _compile_filter_run(members: list[tuple], seed: int) -> Callable[[tuple, WME | None], list]:
-    """Every combination of WMEs passing a run of filters given a token's values, as nested
-    loops; member ``seed`` (if any) may only match the WME passed in (it was just added)."""
+def _joins_within(plan: _Plan, base: int, amem: _AlphaMemory, run: list[tuple]) -> bool:
+    """Whether a condition can join a run that started with ``base`` values: it is hashed
+    on one of them and tests no other value bound after them (so it is independent of the
+    run's other conditions), and its alpha memory is not one of theirs."""
+    if plan.index is None or plan.index[0] >= base:
+        return False
+    if any(ref[0] == "v" and ref[1] >= base for spec in plan.beta for ref in (spec[0], spec[2])):
+        return False
+    return all(other is not amem for _, _, other in run)
+
+
+def _compile_run(members: list[tuple], seed: int) -> Callable[[tuple, WME | None], list]:
+    """Every combination of WMEs matching a run of independent conditions given a token's
+    values, as ``(values extended by what they bind, WMEs)``, in nested loops; member
+    ``seed`` (if any) may only match the WME passed in (it was just added)."""
     namespace: dict[str, object] = {"FLOAT": _FLOAT, "same": same_symbol}
     lines = ["def combos(vals, seed):", "    out = []"]
     depth = 1
-    for k, (_, index, pos, getter, check) in enumerate(members):
+    for k, (_, index, pos, getter, check, _) in enumerate(members):
         pad = "    " * depth
         namespace.update({f"I{k}": index, f"G{k}": getter, f"C{k}": check})
         lines += _bucket_lines(k, pad, "vals", pos, k == seed)
@@ -1293,33 +1305,39 @@ def _compile_filter_run(members: list[tuple], seed: int) -> Callable[[tuple, WME
             lines.append(f"{pad}    if not C{k}(vals, w{k}): continue")
         depth += 1
     pad = "    " * depth
-    lines.append(f"{pad}out.append(({''.join(f'w{k}, ' for k in range(len(members)))}))")
+    bound = "".join(f"w{k}.{field}, " for k, member in enumerate(members) for field in member[5])
+    wmes = "".join(f"w{k}, " for k in range(len(members)))
+    lines.append(f"{pad}out.append((vals + ({bound}), ({wmes})))" if bound else
+                 f"{pad}out.append((vals, ({wmes})))")
     lines.append("    return out")
     return _define(lines, namespace, "combos")
 
 
-class _FilterRunNode(_Node):
-    """Consecutive positive conditions that bind nothing (``(<c> ^zmax > <zl>)`` after
-    ``<c>`` and ``<zl>`` are bound), joined as one node.
+class _RunNode(_Node):
+    """Consecutive positive conditions that test only values the parent token already has,
+    joined as one node: ``(<c> ^zmax > <zl>)`` filters after ``<c>`` and ``<zl>`` are bound,
+    or ``(<o> ^disk <d>) (<o> ^from <f>)`` once ``<o>`` is.
 
-    Each filter only tests values the parent token already has, so they are independent of
-    one another: one token per combination of passing WMEs (``tok[1]`` is the tuple of
-    them), instead of a chain of nodes whose tokens mostly die a level or two further down.
-    In the block planner's geometry rules every pair of blocks goes through six such
-    tests; as a chain they made three tokens per pair."""
+    Such conditions are independent of one another, so their join is the product of their
+    matches: one token per combination (``tok[1]`` is the tuple of its WMEs, ``tok[2]`` the
+    values extended by what they bind), instead of a chain of nodes with a token per
+    condition, most of which die a level or two further down.  In the block planner's
+    geometry rules every pair of blocks goes through six filters; as a chain they made three
+    tokens per pair."""
 
     __slots__ = ("members", "amems", "combos", "registry")
 
     def __init__(self, rete: Rete, parent: _Node, key: object, members: list[tuple]) -> None:
         super().__init__(rete, parent, key)
-        # per filter: (alpha memory, its hash index, parent value position, getter, check)
+        # per condition: (alpha memory, its hash index, parent value position, getter,
+        # check, fields it binds)
         self.members = members
         self.amems = [member[0] for member in members]
         self.registry = rete._wme_info
-        # combos[0]: every combination; combos[k + 1]: those with filter k matching a WME
-        self.combos = [_compile_filter_run(members, seed) for seed in range(-1, len(members))]
-        for _, _, pos, _, _ in members:
-            parent.index(pos)
+        # combos[0]: every combination; combos[k + 1]: those with condition k matching a WME
+        self.combos = [_compile_run(members, seed) for seed in range(-1, len(members))]
+        for member in members:
+            parent.index(member[2])
 
     def activation(self, amem: _AlphaMemory) -> Callable[[WME], None]:
         k = self.amems.index(amem)
@@ -1343,8 +1361,8 @@ class _FilterRunNode(_Node):
 
     def _make(self, t: _Token, found: list[tuple]) -> None:
         registry = self.registry
-        for wmes in found:
-            tok = _Token((t, wmes, t[2], self, None, None))
+        for vals, wmes in found:
+            tok = _Token((t, wmes, vals, self, None, None))
             _adopt(t, tok)
             for wme in wmes:
                 registry[wme][1][tok] = None
@@ -1399,7 +1417,7 @@ class _Layout:
 
     def __init__(self, levels: list[tuple[int, ...]], bindings: list[tuple[str, int]]) -> None:
         # levels[k] = written indices of the elements matched at token level k: one, or
-        # several for a run of filters (whose token holds a tuple of WMEs)
+        # several for a run of independent conditions (whose token holds a tuple of WMEs)
         self.levels = levels[::-1]
         self.size = sum(len(level) for level in levels)
         self.bindings = bindings
@@ -1872,7 +1890,7 @@ class Rete:
         scope = _bound_by(conditions)
         var_pos: dict[str, int] = {}
         bottom, levels = self._build_scope(conditions, self._root, var_pos, 0, scope,
-                                           _singletons(production), set(), filter_runs=True)
+                                           _singletons(production), set(), runs=True)
         layout = _Layout(levels, sorted((n, p) for n, p in var_pos.items() if n in scope))
         pnode = _ProductionNode(self, bottom, production, layout)
         bottom.children.append(pnode)
@@ -2085,23 +2103,25 @@ class Rete:
 
     def _build_scope(self, elements: tuple[ConditionElement, ...], parent: _Node,
                      var_pos: dict[str, int], nvals: int, scope: set[str],
-                     singletons: set[str], states: set[str], filter_runs: bool = False
+                     singletons: set[str], states: set[str], runs: bool = False
                      ) -> tuple[_Node, list[tuple[int, ...]]]:
         """Build the nodes of ``elements`` below ``parent``; return the bottom node and the
-        written indices matched at each token level.  ``filter_runs``: join consecutive
-        filters as one node (not inside an NCC subnetwork, whose partner counts levels)."""
+        written indices matched at each token level.  ``runs``: join consecutive independent
+        conditions as one node (not inside an NCC subnetwork, whose partner counts levels)."""
         order = _join_order(elements, var_pos, scope, singletons, self._volatile)
         deferred: list[tuple[int, str, str]] = []
         node = parent
         levels: list[tuple[int, ...]] = []
-        run: list[tuple[int, _Plan, _AlphaMemory]] = []  # filters waiting to be joined
+        run: list[tuple[int, _Plan, _AlphaMemory]] = []  # independent conditions to join
+        base = nvals  # the parent's number of values when the run started
 
         def close_run() -> None:
-            nonlocal node
+            nonlocal node, base
             if run:
-                node = self._filter_node(node, run)
+                node = self._run_node(node, run)
                 levels.append(tuple(index for index, _, _ in run))
                 run.clear()
+            base = nvals
 
         for index in order:
             element = elements[index]
@@ -2115,10 +2135,13 @@ class Rete:
             if element.goal is not None and not element.negated:
                 states.update(equality_vars(element.id_test))
             amem = self._alpha_memory(plan)
-            if (filter_runs and not element.negated and not plan.new_fields
-                    and plan.index is not None and all(a is not amem for _, _, a in run)):
-                run.append((index, plan, amem))
-                continue
+            if runs and not element.negated:
+                if run and not _joins_within(plan, base, amem, run):
+                    close_run()
+                if _joins_within(plan, nvals if not run else base, amem, run):
+                    run.append((index, plan, amem))
+                    nvals += len(plan.new_fields)
+                    continue
             close_run()
             levels.append((index,))
             check = _compile_check(plan.beta)
@@ -2137,20 +2160,24 @@ class Rete:
             raise AssertionError(f"relational tests never placed: {deferred}")
         return node, levels
 
-    def _filter_node(self, parent: _Node, run: list[tuple[int, _Plan, _AlphaMemory]]) -> _Node:
-        """A lone filter is an ordinary join node; two or more make a _FilterRunNode."""
+    def _run_node(self, parent: _Node, run: list[tuple[int, _Plan, _AlphaMemory]]) -> _Node:
+        """A lone condition is an ordinary join node; two or more make a _RunNode."""
         if len(run) == 1:
             _, plan, amem = run[0]
-            key = ("join", id(amem), plan.index, tuple(plan.beta), ())
+            fields = tuple(plan.new_fields)
+            key = ("join", id(amem), plan.index, tuple(plan.beta), fields)
             return self._child(parent, key, lambda p, k: _JoinNode(
-                self, p, k, amem, plan.index, _compile_check(plan.beta), None), amem)
-        key = ("filters", tuple((id(amem), plan.index, tuple(plan.beta)) for _, plan, amem in run))
+                self, p, k, amem, plan.index, _compile_check(plan.beta), _extender(fields)),
+                amem)
+        key = ("run", tuple((id(amem), plan.index, tuple(plan.beta), tuple(plan.new_fields))
+                            for _, plan, amem in run))
         node = parent.child_map.get(key)
         if node is not None:
             return node
         members = [(amem, amem.index(plan.index[1]), plan.index[0], _GET[plan.index[1]],
-                    _compile_check(plan.beta)) for _, plan, amem in run]  # type: ignore[index]
-        node = _FilterRunNode(self, parent, key, members)
+                    _compile_check(plan.beta), tuple(plan.new_fields))
+                   for _, plan, amem in run]  # type: ignore[index]
+        node = _RunNode(self, parent, key, members)
         parent.children.append(node)
         parent.child_map[key] = node
         for _, _, amem in run:
@@ -2265,7 +2292,7 @@ class Rete:
             amem.unlink(node)
             if not amem.successors and not amem.listeners:
                 self._drop_alpha_memory(amem)
-        if isinstance(node, _FilterRunNode):
+        if isinstance(node, _RunNode):
             for amem in node.amems:
                 amem.unlink(node)
                 if not amem.successors and not amem.listeners and amem.key in self._amems:

@@ -315,9 +315,9 @@ def test_ncc_inner_negation_invalidates_and_restores_witnesses(world: World) -> 
     assert world.values("r", "n") == ["u", "v"]
 
 
-def test_filter_runs_match_in_any_arrival_order(world: World) -> None:
-    """Consecutive tests that bind nothing (one node in the Rete) give one match per
-    combination of WMEs, whichever arrives first, and lose it when any of them goes."""
+def test_runs_match_in_any_arrival_order(world: World) -> None:
+    """Consecutive independent tests (one node in the Rete) give one match per combination
+    of WMEs, whichever arrives first, and lose it when any of them goes."""
     a, b = world.new(), world.new()
     world.rule("(state <s> ^pair <p>) (<p> ^left <a> ^right <b>)"
                " (<a> ^x <xa>) (<b> ^x > <xa>) (<b> ^y < <xa>) (<a> ^tag <t>) (<b> ^tag <t>)")
@@ -342,17 +342,21 @@ def test_filter_runs_match_in_any_arrival_order(world: World) -> None:
     assert world.bindings() == []
 
 
-def test_filter_run_node_is_shared_and_removed() -> None:
+def test_run_nodes_are_shared_and_removed() -> None:
     rete = Rete()
     text = "(state <s> ^block <b>) (<b> ^size 2) (<b> ^color red) (<s> ^mode go)"
     rete.add_production(parse_production(f"sp {{one {text} --> (write x)}}"))
+    rete.take_changes()  # builds the network
+    alone = _node_count(rete)
     rete.add_production(parse_production(f"sp {{two {text} --> (write y)}}"))
+    rete.take_changes()
+    assert _node_count(rete) == alone + 1  # only a production node
     s1, b = Identifier("S", 1, level=1), Identifier("B", 1)
     for t, wme in enumerate([(s1, "block", b), (b, "size", 2), (b, "color", "red"),
                              (s1, "mode", "go")]):
         rete.add_wme(WME(*wme, t))  # type: ignore[arg-type]
-    runs = [n for n in _nodes(rete) if type(n).__name__ == "_FilterRunNode"]
-    assert len(runs) == 1 and len(rete.matches("one")) == len(rete.matches("two")) == 1
+    runs = [n for n in _nodes(rete) if type(n).__name__ == "_RunNode"]
+    assert runs and len(rete.matches("one")) == len(rete.matches("two")) == 1
     (match,) = rete.matches("one")
     assert [w.attr for w in match.wmes] == ["block", "size", "color", "mode"]
     rete.excise("one")
