@@ -908,7 +908,17 @@ class Agent:
         slot = pref.slot
         if slot is None or not pref.live:
             return
-        slot.remove(pref)
+        # Slot.remove, inlined (Preference compares by identity: list.remove is a C search).
+        prefs = slot.prefs
+        bucket = prefs.get(pref.type)
+        if bucket is not None:
+            try:
+                bucket.remove(pref)
+            except ValueError:
+                pass
+            if not bucket:
+                del prefs[pref.type]
+        pref.live = False
         if slot.is_context:
             self._context_changed_at(slot.id)
         if not slot.changed:
