@@ -448,11 +448,17 @@ class Agent:
                 self._unlinked.append(value)
         if self.trace_level >= 4:
             self._emit("\n<=WM: " + trace_wme(wme))
-        dependents = self._dependents.pop(wme, None) if self._dependents else None
+        if self._dependents or self._gds_index:  # justifications and substates only
+            self._substate_wme_gone(wme)
+
+    def _substate_wme_gone(self, wme: WME) -> None:
+        """A WME left: retract the justifications that rest on it and remove the substates
+        whose goal dependency set holds it."""
+        dependents = self._dependents.pop(wme, None)
         if dependents:
             for inst in dependents:
                 self._schedule_retraction(inst)
-        goals = self._gds_index.pop(wme, None) if self._gds_index else None
+        goals = self._gds_index.pop(wme, None)
         if goals:
             for goal in goals:
                 if goal.alive:
