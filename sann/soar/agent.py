@@ -27,9 +27,11 @@ from . import decide as dec
 from .errors import SoarError, SoarRuntimeError
 from .goals import Goal
 from .instantiation import (
+    COMPILE_AFTER,
     Instantiation,
     ProductionInfo,
     compile_actions,
+    interpret_actions,
     is_o_supported,
     match_goal,
     tested_operators,
@@ -351,7 +353,8 @@ class Agent:
         self._sources: weakref.WeakKeyDictionary[WME, Instantiation] = weakref.WeakKeyDictionary()
         self._unlinked: list[Identifier] = []
         self._dependents: dict[WME, list[Instantiation]] = {}
-        self._gds_index: dict[WME, set[Goal]] = {}
+        #: WME -> the goals whose GDS holds it (a dict: removal order is insertion order).
+        self._gds_index: dict[WME, dict[Goal, None]] = {}
         #: Input handles whose WME is to be added or removed at the next input phase.
         self._input_ops: list[WMEHandle] = []
         self._input_wmes: dict[Identifier, list[WME]] = {}
@@ -803,11 +806,15 @@ class Agent:
         )
         bindings = match.bindings  # type: ignore[attr-defined]
         program = info.program
-        if program is None:
-            program = info.program = compile_actions(name, info.actions, frozenset(bindings))
-        program(self, bindings, inst, o_support, operators)
+        if program is not None:
+            program(self, bindings, inst, o_support, operators)
+        else:
+            info.runs += 1
+            if info.runs >= COMPILE_AFTER:
+                info.program = compile_actions(name, info.actions, frozenset(bindings))
+            interpret_actions(info.actions, self, bindings, inst, o_support, operators)
         if goal.level > 1:
-            goal.insts.add(inst)
+            goal.insts[inst] = None
             self._handle_substate_preferences(inst)
         return inst
 
@@ -832,7 +839,7 @@ class Agent:
                 removed = True
                 remove(pref)
         if inst.goal.level > 1 and not any(p.live for p in inst.prefs):
-            inst.goal.insts.discard(inst)
+            inst.goal.insts.pop(inst, None)
         if inst.is_justification:
             if self._justification_index.get(inst.match) is inst:  # type: ignore[arg-type]
                 del self._justification_index[inst.match]  # type: ignore[arg-type]
@@ -1383,7 +1390,7 @@ class Agent:
         for wme in goal.gds:
             bucket = self._gds_index.get(wme)
             if bucket is not None:
-                bucket.discard(goal)
+                bucket.pop(goal, None)
                 if not bucket:
                     del self._gds_index[wme]
         goal.gds.clear()
@@ -1476,7 +1483,7 @@ class Agent:
             else:  # a new GDS takes these WMEs at once (measured on the kernel)
                 for wme in wmes:
                     goal.gds.add(wme)
-                    self._gds_index.setdefault(wme, set()).add(goal)
+                    self._gds_index.setdefault(wme, {})[goal] = None
 
     def _extend_gds(self) -> None:
         pending, self._pending_gds = self._pending_gds, []
@@ -1487,7 +1494,7 @@ class Agent:
             for wme in wmes:
                 if wm.get(wme.timetag) is wme and wme not in goal.gds:
                     goal.gds.add(wme)
-                    self._gds_index.setdefault(wme, set()).add(goal)
+                    self._gds_index.setdefault(wme, {})[goal] = None
 
     def _find_results(self, inst: Instantiation, level: int) -> list[Preference]:
         results: list[Preference] = []
@@ -1549,7 +1556,7 @@ class Agent:
                 self._dependents.setdefault(wme, []).append(just)
             self._watch_negations(just, visited, inst.goal.level)
         if home.level > 1:
-            home.insts.add(just)
+            home.insts[just] = None
 
     def _replace_duplicate_justification(self, just: Instantiation) -> None:
         """A justification identical to a live one (same conditions, same results)

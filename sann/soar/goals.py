@@ -55,8 +55,10 @@ class Goal:
         self.pending_i: dict[object, ProductionInfo] = {}
         self.pending_o: dict[object, ProductionInfo] = {}
         self.retractions: list[Instantiation] = []
-        #: Instantiations whose preferences die with this (sub)state.
-        self.insts: set[Instantiation] = set()
+        #: Instantiations whose preferences die with this (sub)state, oldest first (a dict,
+        #: not a set: removing the state walks them in an order that does not depend on
+        #: where the objects happen to live in memory).
+        self.insts: dict[Instantiation, None] = {}
         #: Goal dependency set: superstate WMEs its o-supported WMEs depend on.
         self.gds: set[WME] = set()
         self.alive = True

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from .errors import SoarError, SoarRuntimeError
-from .memory import WME, Identifier
+from .memory import WME, Identifier, Symbol
 from .preferences import Preference, preference_type
 from .production import CallAction, Const, FuncCall, MakeAction, Production, RhsValue, Var
 from .rhs import FUNCTIONS, format_value
@@ -50,8 +50,11 @@ class ProductionInfo:
     #: Per top-level condition: 2 if its attribute test is a constant, +4 if its value test
     #: is; the kernel's alpha-memory order when one WME makes several matches.
     cond_masks: tuple[int, ...] = ()
-    #: The compiled right-hand side, made at the first firing (`compile_actions`).
+    #: The compiled right-hand side (`compile_actions`), made once the production has
+    #: fired `COMPILE_AFTER` times; until then its actions are interpreted.
     program: RhsProgram | None = None
+    #: Firings since load (``firings`` restarts at init-soar).
+    runs: int = 0
 
     @classmethod
     def of(cls, production: Production) -> ProductionInfo:
@@ -85,6 +88,87 @@ class ProductionInfo:
             make_ids,
             cond_masks=masks,
         )
+
+
+#: Compiling a right-hand side costs about as much as a few hundred interpreted firings,
+#: so only productions that keep firing are compiled.
+COMPILE_AFTER = 100
+
+
+def interpret_actions(
+    actions: Sequence[MakeAction | CallAction],
+    agent: object,
+    bindings: dict[str, Symbol],
+    inst: Instantiation,
+    o_support: bool,
+    operators: Sequence[object],
+) -> None:
+    """What a compiled program does (`compile_actions`), by walking the actions."""
+    bindings = dict(bindings)  # new identifiers are bound for this firing only
+    prefs = inst.prefs
+    for action in actions:
+        try:
+            if type(action) is MakeAction:
+                pref = _make_preference(agent, action, bindings, inst)
+                if pref is not None:
+                    if o_support and pref.id not in operators:
+                        pref.o_supported = True
+                    prefs.append(pref)
+            else:
+                _call(agent, action.call, bindings, inst)  # type: ignore[union-attr]
+        except SoarError as error:
+            agent._report_rhs_error(inst, error)  # type: ignore[attr-defined]
+
+
+def _make_preference(
+    agent: object, action: MakeAction, bindings: dict[str, Symbol], inst: Instantiation
+) -> Preference | None:
+    ident = _value(agent, action.id, bindings, inst)
+    attr = _value(agent, action.attr, bindings, inst)
+    value = _value(agent, action.value, bindings, inst)
+    referent = None
+    if action.referent is not None:
+        referent = _value(agent, action.referent, bindings, inst)
+    if type(ident) is not Identifier:
+        agent._emit(  # type: ignore[attr-defined]
+            f"\nError: production {inst.name} makes a preference for a non-identifier"
+            f" {format_value(ident)}; action ignored."
+        )
+        return None
+    ptype = action.preference
+    if referent is not None:
+        ptype = preference_type(ptype, referent)
+    return Preference(ptype, ident, attr, value, referent, inst)
+
+
+def _value(
+    agent: object, value: RhsValue, bindings: dict[str, Symbol], inst: Instantiation
+) -> Symbol:
+    kind = type(value)
+    if kind is Var:
+        bound = bindings.get(value.name)  # type: ignore[union-attr]
+        if bound is None:  # an unbound variable names a new identifier
+            bound = agent._new_id(value.name, inst.goal.level)  # type: ignore[attr-defined, union-attr]
+            bindings[value.name] = bound  # type: ignore[union-attr]
+        return bound
+    if kind is Const:
+        return value.value  # type: ignore[union-attr]
+    if kind is FuncCall:
+        result = _call(agent, value, bindings, inst)  # type: ignore[arg-type]
+        if result is None:
+            raise SoarRuntimeError(f"({value.name}) returns no value")  # type: ignore[union-attr]
+        return result
+    raise SoarRuntimeError(f"cannot evaluate {value!r}")
+
+
+def _call(
+    agent: object, call: FuncCall, bindings: dict[str, Symbol], inst: Instantiation
+) -> Symbol | None:
+    function = FUNCTIONS.get(call.name)
+    if function is None:
+        raise SoarRuntimeError(f"unknown RHS function ({call.name})")
+    args = [_value(agent, arg, bindings, inst) for arg in call.args]
+    return function(agent, args)  # type: ignore[arg-type]
 
 
 def compile_actions(
