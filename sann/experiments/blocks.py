@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 from sklearn.manifold import TSNE
+from threadpoolctl import threadpool_limits
 
 from sann.nets import ShallowNet
 from sann.tasks.blocks import make_dataset
@@ -73,10 +74,18 @@ def tsne_layers(data, runs: dict[str, TrainResult], points: int, seed: int) -> d
         with torch.no_grad():
             hidden = run.model.hidden(torch.from_numpy(x)).numpy()
         for layer, values in (("input", x), ("hidden", hidden)):
-            tsne = TSNE(n_components=2, init="pca", random_state=seed,
-                        perplexity=min(30.0, (len(values) - 1) / 3))
-            maps[layer][name.upper()] = tsne.fit_transform(values)
+            maps[layer][name.upper()] = embed(values, seed)
     return {"maps": maps, "labels": data.y_test[chosen]}
+
+
+def embed(values: np.ndarray, seed: int) -> np.ndarray:
+    """2-D t-SNE map of ``values`` on one OpenMP thread: the gradient's parallel sums make
+    the map depend on the thread count, and on a busy machine (the test suite runs two
+    workers) spinning OpenMP threads made each map take 25-30 s instead of 4."""
+    tsne = TSNE(n_components=2, init="pca", random_state=seed,
+                perplexity=min(30.0, (len(values) - 1) / 3))
+    with threadpool_limits(limits=1, user_api="openmp"):
+        return tsne.fit_transform(values)
 
 
 def run(out: str | Path, config: BlocksExperiment = BlocksExperiment(),
