@@ -1180,10 +1180,21 @@ class _QueryNCCNode(_Node):
     def left_activate(self, t: _Token) -> None:
         vals = t[2]
         tok = _Token((t, None, vals, self, None, None))
-        _adopt(t, tok)
+        siblings = t[4]
+        if siblings is None:
+            t[4] = {tok: None}
+        else:
+            siblings[tok] = None
         self.owners[t] = tok
         for pos, index in self.owner_index.items():
-            _index_add(index, _hkey(vals[pos]), tok)
+            key = vals[pos]
+            if key.__class__ is float:
+                key = (_FLOAT, key)
+            same = index.get(key)
+            if same is None:
+                index[key] = {tok: None}
+            else:
+                same[tok] = None
         found = self.solvers[0](vals, None)
         if found is None:
             self.store(tok)
