@@ -385,15 +385,3 @@ def tested_operators(
         for i in info.operator_conditions
         if wmes[i] is not None and wmes[i].id is goal  # type: ignore[union-attr]
     ]
-
-
-def variables_in(value: RhsValue) -> list[str]:
-    """Variable names used in an RHS value (for error messages and checks)."""
-    if isinstance(value, Var):
-        return [value.name]
-    if isinstance(value, FuncCall):
-        out: list[str] = []
-        for arg in value.args:
-            out.extend(variables_in(arg))
-        return out
-    return []
