@@ -11,7 +11,7 @@ import math
 import random
 from dataclasses import dataclass
 
-from .memory import Symbol
+from .memory import Identifier, Symbol
 from .preferences import (
     ACCEPTABLE,
     BEST,
@@ -59,6 +59,11 @@ def run_preference_semantics(
     With ``consistency`` (the mid-phase check of the selected operator) indifferent
     candidates are all returned instead of choosing one at random.
     """
+    prefs = slot.prefs
+    if len(prefs) == 1:  # the usual slot: one acceptable preference and nothing else
+        only = prefs.get(ACCEPTABLE)
+        if only is not None and len(only) == 1:
+            return NONE, [only[0].value]
     if slot.of_type(REQUIRE):
         return _require_semantics(slot)
     candidates = _acceptable_candidates(slot)
@@ -92,8 +97,9 @@ def _push_front_unique(values: list[Symbol]) -> list[Symbol]:
 
 
 def _key(value: Symbol) -> object:
-    """Symbols compare by type and value (``1`` and ``1.0`` are different symbols)."""
-    return (type(value), value) if not hasattr(value, "letter") else id(value)
+    """Symbols compare by type and value (``1`` and ``1.0`` are different symbols);
+    identifiers by identity."""
+    return id(value) if type(value) is Identifier else (type(value), value)
 
 
 def _require_semantics(slot: Slot) -> tuple[str, list[Symbol]]:
