@@ -153,11 +153,18 @@ class Agent:
             error: SoarError | None = None
         except SoarError as exc:
             items, error = self._items_before(text, file, exc), exc
-        for item in items:
-            if isinstance(item, Production):
-                self.add_production(item)
-            elif isinstance(item, Command):
-                commands.execute(self, item, base)
+        try:
+            for item in items:
+                if isinstance(item, Production):
+                    self._add_production(item)
+                elif isinstance(item, Command):
+                    self._collect_changes(in_match_order=True)
+                    commands.execute(self, item, base)
+        finally:
+            # One collection for a run of productions: the matcher builds them together,
+            # knowing which attributes the whole file's rules remove (it joins those last),
+            # and the matches are queued in the same load order as one by one.
+            self._collect_changes(in_match_order=True)
         if error is not None:
             raise error
 
@@ -207,16 +214,21 @@ class Agent:
 
     def add_production(self, production: Production) -> None:
         """Add a parsed production; one with the same name replaces the old one."""
+        self._add_production(production)
+        # Matches that exist at load time are queued now, in load order, as the kernel
+        # makes them when it adds the production to its Rete.
+        self._collect_changes(in_match_order=True)
+
+    def _add_production(self, production: Production) -> None:
+        """Add a production, leaving its load-time matches in the matcher for the caller."""
         if production.name in self._productions:
+            self._collect_changes(in_match_order=True)
             self.excise(production.name)
         self.matcher.add_production(production)
         info = ProductionInfo.of(production)
         self._load_count += 1
         info.load_index = self._load_count
         self._productions[production.name] = info
-        # Matches that exist at load time are queued now, in load order, as the kernel
-        # makes them when it adds the production to its Rete.
-        self._collect_changes(in_match_order=True)
 
     def excise(self, name: str) -> None:
         """Remove a production; its i-supported preferences retract in the next cycle."""
