@@ -1173,8 +1173,6 @@ class _QueryNCCNode(_Node):
     def all_tokens(self) -> list[_Token]:
         return list(self.owners.values())
 
-    # ----- the query -----
-
     # ----- parent tokens -----
 
     def left_activate(self, t: _Token) -> None:

@@ -12,7 +12,7 @@ import io
 from pathlib import Path
 
 import pytest
-from differential.kernel import read_spec
+from differential.kernel import _add_our_inputs, read_spec
 
 import sann.soar.agent as agent_module
 from sann.soar.agent import Agent
@@ -34,13 +34,7 @@ def _run(path: Path, compile_after: int, monkeypatch: pytest.MonkeyPatch) -> tup
     agent = Agent(out=out, seed=7)
     agent.source(str(path))
     agent.trace(5)
-    for attr, value in INPUT_OVERRIDES.get(path.name, spec.inputs):
-        if isinstance(value, tuple):
-            handle = agent.input_link.add(attr)
-            for name, child in value:
-                handle.add(name, child)
-        else:
-            agent.input_link.add(attr, value)
+    _add_our_inputs(agent, INPUT_OVERRIDES.get(path.name, spec.inputs))
     agent.run(decisions=spec.decisions)
     wm = [(w.timetag, str(w.id), str(w.attr), str(w.value), w.acceptable) for w in agent.wmes()]
     return out.getvalue(), agent.stats, list(agent.errors), wm, agent.operator_sequence
