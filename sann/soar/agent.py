@@ -1046,8 +1046,8 @@ class Agent:
                     self._collect_garbage(slot)
 
     def _add_slot_wmes(self, adds: list[tuple[Slot, object, Symbol]]) -> None:
-        """Make the WMEs the slot diffs decided on: ``(slot, value key, value)``, the key
-        holding a placeholder until now."""
+        """Make the WMEs the slot diffs decided on: ``(slot, value key, value)``; the diff
+        already entered the key in ``slot.wmes``, without its WME."""
         add_wme = self._add_wme
         levels = self._level
         for slot, key, value in adds:

@@ -99,10 +99,10 @@ REFUSED_RHS_FUNCTIONS: frozenset[str] = frozenset({"exec", "cmd"})
 
 _REFUSAL = "a rule file never runs shell commands or Python"
 
-# Placeholder variables are created with a name no user variable can have (NUL is not a
-# constituent character) and renamed to the kernel's `<a*1>` names once the whole production
-# is known, so that the fresh names skip every name the production already uses.
-_PLACEHOLDER = "\0"
+# Fresh variables get a temporary name no user variable can have (NUL is not a constituent
+# character) and are renamed to the kernel's `<a*1>` names once the whole production is known,
+# so that the final names skip every name the production already uses.
+_TEMPORARY = "\0"
 
 
 # ------------------------------------------------------------------------------- the parser
@@ -237,7 +237,7 @@ class _ToDataclasses(Transformer):
 
     def _fresh_variable(self, letter: str) -> Var:
         self._fresh += 1
-        name = f"{_PLACEHOLDER}{self._fresh}{_PLACEHOLDER}{letter}"
+        name = f"{_TEMPORARY}{self._fresh}{_TEMPORARY}{letter}"
         self._fresh_names.append(name)
         return Var(name)
 
@@ -560,24 +560,24 @@ def _calls(value: object) -> Iterator[FuncCall]:
             yield from _calls(arg)
 
 
-def _fresh_names(placeholders: list[str], used: set[str]) -> dict[str, str]:
+def _fresh_names(temporary: list[str], used: set[str]) -> dict[str, str]:
     """The kernel's names for fresh variables: ``<letter*n>``, n counting per letter from 1
     in creation order and skipping names the production already uses."""
     counters: dict[str, int] = {}
     names: dict[str, str] = {}
-    for placeholder in placeholders:
-        letter = placeholder.rsplit(_PLACEHOLDER, 1)[1]
+    for name in temporary:
+        letter = name.rsplit(_TEMPORARY, 1)[1]
         while True:
             counters[letter] = counters.get(letter, 0) + 1
             candidate = f"{letter}*{counters[letter]}"
             if candidate not in used:
                 break
-        names[placeholder] = candidate
+        names[name] = candidate
     return names
 
 
 # Renaming is written out per type: it runs on most productions (every path and missing value
-# makes a placeholder), and a generic walk over dataclass fields costs several times more.
+# makes a fresh variable), and a generic walk over dataclass fields costs several times more.
 
 
 def _rename_test(test: Test, names: dict[str, str]) -> Test:
