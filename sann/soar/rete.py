@@ -1,6 +1,6 @@
 """Matching productions against working memory.
 
-Two matchers with one interface (see notes/RETE-API.md):
+Two matchers with one interface:
 
 - :class:`Rete` — the Doorenbos (1995) Rete: an alpha network hashed on constant attribute
   and value tests, hashed beta joins, negative and conjunctive-negation (NCC) nodes, shared
@@ -888,22 +888,11 @@ class _NegativeNode(_Node):
     def left_activate(self, t: _Token) -> None:
         vals = t[2]
         tok = _Token((t, None, vals, self, None, None))
-        siblings = t[4]
-        if siblings is None:
-            t[4] = {tok: None}
-        else:
-            siblings[tok] = None
+        _adopt(t, tok)
         self.every[tok] = None
-        pos = self.pos
-        if pos >= 0:
-            key = vals[pos]
-            if key.__class__ is float:
-                key = (_FLOAT, key)
-            same = self.every_index.get(key)
-            if same is None:
-                self.every_index[key] = {tok: None}
-            else:
-                same[tok] = None
+        if self.pos >= 0:
+            key = _hkey(vals[self.pos])
+            _index_add(self.every_index, key, tok)
             bucket = self.amem_index.get(key)
         else:
             bucket = self.amem.wmes
@@ -916,18 +905,7 @@ class _NegativeNode(_Node):
                         blockers = {}
                     blockers[wme] = None
         if blockers is None:
-            self.tokens[tok] = None  # _Node.store, inline
-            for pos, index in self.index_list:
-                key = vals[pos]
-                if key.__class__ is float:
-                    key = (_FLOAT, key)
-                same = index.get(key)
-                if same is None:
-                    index[key] = {tok: None}
-                else:
-                    same[tok] = None
-            for child in self.children:
-                child.left_activate(tok)
+            self.store(tok)
             return
         tok[5] = blockers
         info = self.rete._wme_info
@@ -1178,21 +1156,10 @@ class _QueryNCCNode(_Node):
     def left_activate(self, t: _Token) -> None:
         vals = t[2]
         tok = _Token((t, None, vals, self, None, None))
-        siblings = t[4]
-        if siblings is None:
-            t[4] = {tok: None}
-        else:
-            siblings[tok] = None
+        _adopt(t, tok)
         self.owners[t] = tok
         for pos, index in self.owner_index.items():
-            key = vals[pos]
-            if key.__class__ is float:
-                key = (_FLOAT, key)
-            same = index.get(key)
-            if same is None:
-                index[key] = {tok: None}
-            else:
-                same[tok] = None
+            _index_add(index, _hkey(vals[pos]), tok)
         found = self.solvers[0](vals, None)
         if found is None:
             self.store(tok)
@@ -1928,16 +1895,7 @@ class Rete:
             accept = amem.accept
             if accept is not None and not accept(wme):
                 continue
-            amem.wmes[wme] = None  # _AlphaMemory.add, inline: this is every WME's path
-            for getter, index in amem.index_list:
-                key = getter(wme)
-                if key.__class__ is float:
-                    key = (_FLOAT, key)
-                bucket = index.get(key)
-                if bucket is None:
-                    index[key] = {wme: None}
-                else:
-                    bucket[wme] = None
+            amem.add(wme)
             amems.append(amem)
             for right_activate, parent_tokens in amem.activations:
                 if parent_tokens:
@@ -1954,15 +1912,7 @@ class Rete:
         if info is None:
             raise ValueError(f"{wme!r} is not in working memory")
         for amem in info[0]:
-            del amem.wmes[wme]  # _AlphaMemory.remove, inline
-            for getter, index in amem.index_list:
-                key = getter(wme)
-                if key.__class__ is float:
-                    key = (_FLOAT, key)
-                bucket = index[key]
-                del bucket[wme]
-                if not bucket:
-                    del index[key]
+            amem.remove(wme)
         built = info[1]
         if built:
             for tok in built:
@@ -2356,59 +2306,3 @@ class Rete:
             if children:
                 tok[4] = None
                 stack.extend(children)
-
-
-# ---------------------------------------------------------------------------------------------
-# Benchmark helper
-# ---------------------------------------------------------------------------------------------
-
-
-def measure_wme_cost(wm_size: int, trials: int = 2000, seed: int = 0) -> tuple[float, float]:
-    """Median seconds to add one WME to, and remove it from, a Rete holding ``wm_size`` WMEs.
-
-    The Rete holds three productions that join over every item of a pile (so its memories
-    are indexed and large) and one that matches each added WME; the WME added is one more
-    ``(P ^extra k)``.  For benchmarks/engine.py: the cost should not grow with ``wm_size``.
-    """
-    import random
-    import statistics
-    import time
-
-    from sann.soar.syntax import parse_production
-
-    rng = random.Random(seed)
-    rete = Rete()
-    for text in (
-        "sp {items (state <s> ^pile <p>) (<p> ^item <i>) (<i> ^value < 0) --> (write x)}",
-        "sp {bare (state <s> ^pile <p>) (<p> ^item <i>) -(<i> ^value <v>) --> (write x)}",
-        "sp {pairs (state <s> ^pile <p>) (<p> ^item <i>) (<i> ^value <v>) (<p> ^extra <v>)"
-        " --> (write x)}",
-        "sp {extra (state <s> ^pile <p>) (<p> ^extra <x>) --> (write x)}",
-    ):
-        rete.add_production(parse_production(text))
-    state, pile = Identifier("S", 1, level=1), Identifier("P", 1)
-    timetag = 0
-
-    def wme(ident: Identifier, attr: str, value: Symbol) -> WME:
-        nonlocal timetag
-        timetag += 1
-        return WME(ident, attr, value, timetag)
-
-    rete.add_wme(wme(state, "pile", pile))
-    for k in range(max(0, wm_size - 1) // 2):
-        item = Identifier("I", k + 1)
-        rete.add_wme(wme(pile, "item", item))
-        rete.add_wme(wme(item, "value", rng.randrange(1, 1_000_000)))
-    rete.take_changes()
-    adds, removes = [], []
-    clock = time.perf_counter
-    for k in range(trials):
-        extra = wme(pile, "extra", -k - 1)
-        start = clock()
-        rete.add_wme(extra)
-        middle = clock()
-        rete.remove_wme(extra)
-        adds.append(middle - start)
-        removes.append(clock() - middle)
-        rete.take_changes()
-    return statistics.median(adds), statistics.median(removes)
