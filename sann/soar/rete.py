@@ -1141,7 +1141,8 @@ class _QueryNCCNode(_Node):
         self.owner_tests = owner_tests
         # solvers[0](vals, None): one match of the inner conditions as (vals, wmes), or
         # None; solvers[k + 1](vals, wme): one in which inner condition k matches wme
-        self.solvers = [_compile_query(levels, seed) for seed in range(-1, len(levels))]
+        self.solvers = [_compile_query(levels, seed) if seed < 0 or not levels[seed][6] else None
+                        for seed in range(-1, len(levels))]  # negated levels are never seeds
         self.owners: dict[_Token, _Token] = {}  # parent token -> this node's token
         self.owner_index: dict[int, dict] = {}  # parent value position -> hashed owners
         for tests in owner_tests:
