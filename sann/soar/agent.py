@@ -251,7 +251,19 @@ class Agent:
         self.matcher.take_changes()
         for info in self._productions.values():
             info.firings = 0
+        self._release_slots()
         self._build()
+
+    def _release_slots(self) -> None:
+        """Break the cycles of the preferences about to be dropped (a live preference, its
+        slot and its instantiation point at one another), so reference counting frees the
+        old working memory at once rather than the cyclic garbage collector later."""
+        for slots in self._slots.values():
+            for slot in slots.values():
+                for bucket in slot.prefs.values():
+                    for pref in bucket:
+                        pref.inst = None  # type: ignore[assignment]
+                slot.prefs.clear()
 
     def run(self, decisions: int | None = None) -> dict[str, int]:
         """Run until halt or interrupt, or until ``decisions`` more decisions were made."""
@@ -889,6 +901,7 @@ class Agent:
             fresh = {id(pref) for inst in insts for pref in inst.prefs}
             for pref in o_rejects:
                 self._o_reject(pref, fresh)
+                pref.inst = None  # type: ignore[assignment]  # never in a slot: done with (see above)
 
     def _slot(self, ident: Identifier, attr: Symbol, create: bool = True) -> Slot | None:
         slots = self._slots.get(ident)
@@ -944,6 +957,10 @@ class Agent:
             if not bucket:
                 del prefs[pref.type]
         pref.live = False
+        # A removed preference no longer needs its instantiation; dropping the link breaks
+        # the inst.prefs <-> pref.inst cycle, so reference counting frees both at once and
+        # the cyclic garbage collector (a quarter of the run time when it had to) stays idle.
+        pref.inst = None  # type: ignore[assignment]
         if slot.is_context:
             self._context_changed_at(slot.id)
         if not slot.changed:

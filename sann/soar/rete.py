@@ -950,6 +950,20 @@ class _NegativeNode(_Node):
                 record[2].pop(tok, None)
 
 
+def _unlink_tokens(root: _Token) -> None:
+    """Cut the links from every token below ``root`` to its children and to what its node
+    keeps in ``extra`` (results, owners, matches), leaving only child-to-parent links: the
+    dropped tokens then hold no cycle, and reference counting frees them at once instead of
+    the cyclic garbage collector later."""
+    stack = [root]
+    while stack:
+        tok = stack.pop()
+        children = tok[4]
+        if children:
+            stack.extend(children)
+        tok[4] = tok[5] = None
+
+
 def _block(record: list, tok: _Token) -> None:
     blocked = record[2]
     if blocked is None:
@@ -1957,7 +1971,7 @@ class Rete:
             for index in amem.indexes.values():
                 index.clear()  # cleared in place: the join nodes hold these very dicts
         self._clear_memories(self._root)
-        self._root_token[4] = None
+        _unlink_tokens(self._root_token)
         for child in self._root.children:  # a node needing no WME gets its token back
             child.left_activate(self._root_token)
 
