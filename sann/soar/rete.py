@@ -623,7 +623,7 @@ class _AlphaMemory:
     the join nodes below test."""
 
     __slots__ = ("key", "lookup", "accept", "wmes", "indexes", "index_list", "successors",
-                 "activations", "listeners")
+                 "activations", "listeners", "on_add", "on_remove")
 
     def __init__(self, key: tuple, lookup: tuple, accept: Callable[[WME], bool] | None) -> None:
         self.key = key
@@ -640,6 +640,10 @@ class _AlphaMemory:
         # (query NCC node, inner condition number): told of every WME added and, for an
         # inner negated condition, removed
         self.listeners: list[tuple[_QueryNCCNode, int]] = []
+        # What a WME entering (leaving) the memory does, generated from the above; compiled
+        # on first use after any of them changes.
+        self.on_add: Callable[[WME], None] = self._compile_then_add
+        self.on_remove: Callable[[WME], None] = self._compile_then_remove
 
     def link(self, node: _Node) -> None:
         """Add a successor in front: nodes are built top-down, and a descendant must be
@@ -651,9 +655,58 @@ class _AlphaMemory:
         self.successors.remove(node)
         self._relink()
 
+    def listen(self, node: _QueryNCCNode, k: int) -> None:
+        self.listeners.append((node, k))
+        self._stale()
+
+    def unlisten(self, node: _QueryNCCNode, k: int) -> None:
+        self.listeners.remove((node, k))
+        self._stale()
+
     def _relink(self) -> None:
         self.activations = [(node.activation(self), node.parent.tokens)  # type: ignore[union-attr]
                             for node in self.successors]
+        self._stale()
+
+    def _stale(self) -> None:
+        self.on_add = self._compile_then_add
+        self.on_remove = self._compile_then_remove
+
+    def _compile_then_add(self, wme: WME) -> None:
+        self._compile()
+        self.on_add(wme)
+
+    def _compile_then_remove(self, wme: WME) -> None:
+        self._compile()
+        self.on_remove(wme)
+
+    def _compile(self) -> None:
+        """Generate ``on_add`` and ``on_remove`` as straight-line code: store the WME in the
+        memory and its indices, then right-activate each successor whose parent memory is
+        not empty and tell the listening query nodes that have owners.  Every WME added to
+        working memory passes here once per alpha memory it enters, and the generated code
+        costs half the interpreted loops over indices, successors and listeners."""
+        namespace: dict[str, object] = {"FLOAT": _FLOAT, "W": self.wmes}
+        add = ["def on_add(wme):", "    W[wme] = None"]
+        remove = ["def on_remove(wme):", "    del W[wme]"]
+        for k, (field, index) in enumerate(self.indexes.items()):
+            namespace[f"I{k}"] = index
+            key = [f"    key = wme.{field}"]
+            if field != "id":  # identifiers are never floats
+                key.append("    if key.__class__ is float: key = (FLOAT, key)")
+            add += key + [f"    b = I{k}.get(key)",
+                          f"    if b is None: I{k}[key] = {{wme: None}}",
+                          "    else: b[wme] = None"]
+            remove += key + [f"    b = I{k}[key]", "    del b[wme]",
+                             f"    if not b: del I{k}[key]"]
+        for k, (activate, parent_tokens) in enumerate(self.activations):
+            namespace[f"P{k}"], namespace[f"R{k}"] = parent_tokens, activate
+            add.append(f"    if P{k}: R{k}(wme)")
+        for k, (node, level) in enumerate(self.listeners):
+            namespace[f"O{k}"], namespace[f"L{k}"] = node.owners, node.inner_added
+            add.append(f"    if O{k}: L{k}({level}, wme)")
+        self.on_add = _define(add, namespace, "on_add")  # type: ignore[method-assign]
+        self.on_remove = _define(remove, dict(namespace), "on_remove")  # type: ignore[method-assign]
 
     def index(self, field: str) -> dict:
         index = self.indexes.get(field)
@@ -664,24 +717,14 @@ class _AlphaMemory:
                 _index_add(index, _hkey(getter(wme)), wme)
             self.indexes[field] = index
             self.index_list.append((getter, index))
+            self._stale()
         return index
 
     def add(self, wme: WME) -> None:
+        """Store a WME without activating anything (a new memory taking in working memory)."""
         self.wmes[wme] = None
         for getter, index in self.index_list:
-            key = getter(wme)
-            if key.__class__ is float:
-                key = (_FLOAT, key)
-            bucket = index.get(key)
-            if bucket is None:
-                index[key] = {wme: None}
-            else:
-                bucket[wme] = None
-
-    def remove(self, wme: WME) -> None:
-        del self.wmes[wme]
-        for getter, index in self.index_list:
-            _index_remove(index, _hkey(getter(wme)), wme)
+            _index_add(index, _hkey(getter(wme)), wme)
 
 
 class _Node:
@@ -1906,19 +1949,15 @@ class Rete:
             raise ValueError(f"{wme!r} is already in working memory")
         amems: list[_AlphaMemory] = []
         self._wme_info[wme] = [amems, {}, None, None]
-        for amem in self._alpha_candidates(wme):
+        attr, value = wme.attr, wme.value  # _alpha_candidates' cache key, looked up inline
+        found = self._alpha_cache.get((_IDENT if attr.__class__ is Identifier else attr,
+                                       _IDENT if value.__class__ is Identifier else value,
+                                       wme.acceptable))
+        for amem in found if found is not None else self._alpha_candidates(wme):
             accept = amem.accept
-            if accept is not None and not accept(wme):
-                continue
-            amem.add(wme)
-            amems.append(amem)
-            for right_activate, parent_tokens in amem.activations:
-                if parent_tokens:
-                    right_activate(wme)
-            if amem.listeners:
-                for node, k in amem.listeners:
-                    if node.owners:
-                        node.inner_added(k, wme)
+            if accept is None or accept(wme):
+                amems.append(amem)
+                amem.on_add(wme)
 
     def remove_wme(self, wme: WME) -> None:
         if self._pending:
@@ -1927,7 +1966,7 @@ class Rete:
         if info is None:
             raise ValueError(f"{wme!r} is not in working memory")
         for amem in info[0]:
-            amem.remove(wme)
+            amem.on_remove(wme)
         built = info[1]
         if built:
             for tok in built:
@@ -2239,7 +2278,7 @@ class Rete:
             return node
         node = _QueryNCCNode(self, parent, key, levels, width, amems, owner_tests)
         for k, amem in enumerate(amems):
-            amem.listeners.append((node, k))
+            amem.listen(node, k)
         parent.children.append(node)
         parent.child_map[key] = node
         for tok in list(parent.tokens):
@@ -2273,7 +2312,7 @@ class Rete:
                     self._drop_alpha_memory(amem)
         if isinstance(node, _QueryNCCNode):
             for k, amem in enumerate(node.amems):
-                amem.listeners.remove((node, k))
+                amem.unlisten(node, k)
             for amem in dict.fromkeys(node.amems):
                 if not amem.successors and not amem.listeners and amem.key in self._amems:
                     self._drop_alpha_memory(amem)
