@@ -1863,7 +1863,7 @@ class Rete:
         self._stale: set[str] = set()  # built before an attribute they check became volatile
         self._amems: dict[tuple, _AlphaMemory] = {}
         self._alpha_index: dict[tuple, list[_AlphaMemory]] = {}
-        self._alpha_cache: dict[tuple, list[_AlphaMemory]] = {}
+        self._alpha_cache: dict[tuple, tuple[list[_AlphaMemory], bool]] = {}
         # per WME: [alpha memories, tokens built on it, negative tokens it blocks]
         self._wme_info: dict[WME, list] = {}
         self._changes = _Changes()
@@ -1947,13 +1947,21 @@ class Rete:
             self._flush()
         if wme in self._wme_info:
             raise ValueError(f"{wme!r} is already in working memory")
-        amems: list[_AlphaMemory] = []
-        self._wme_info[wme] = [amems, {}, None, None]
-        attr, value = wme.attr, wme.value  # _alpha_candidates' cache key, looked up inline
-        found = self._alpha_cache.get((_IDENT if attr.__class__ is Identifier else attr,
+        attr, value = wme.attr, wme.value  # _alpha_entry's cache key, looked up inline
+        entry = self._alpha_cache.get((_IDENT if attr.__class__ is Identifier else attr,
                                        _IDENT if value.__class__ is Identifier else value,
                                        wme.acceptable))
-        for amem in found if found is not None else self._alpha_candidates(wme):
+        found, plain = entry if entry is not None else self._alpha_entry(wme)
+        if plain:
+            # No memory here filters further: the WME enters them all, and the cache's list
+            # (never mutated, see _alpha_memory) is its record of them.
+            self._wme_info[wme] = [found, {}, None, None]
+            for amem in found:
+                amem.on_add(wme)
+            return
+        amems: list[_AlphaMemory] = []
+        self._wme_info[wme] = [amems, {}, None, None]
+        for amem in found:
             accept = amem.accept
             if accept is None or accept(wme):
                 amems.append(amem)
@@ -2056,14 +2064,16 @@ class Rete:
 
     # ----- alpha network -----
 
-    def _alpha_candidates(self, wme: WME) -> list[_AlphaMemory]:
+    def _alpha_entry(self, wme: WME) -> tuple[list[_AlphaMemory], bool]:
+        """The alpha memories whose lookup key fits the WME, and whether none of them has
+        a further test (then the WME enters them all), cached per key."""
         attr, value, acc = wme.attr, wme.value, wme.acceptable
         akey = _IDENT if attr.__class__ is Identifier else attr
         vkey = _IDENT if value.__class__ is Identifier else value
         key = (akey, vkey, acc)
-        found = self._alpha_cache.get(key)
-        if found is None:
-            found = []
+        entry = self._alpha_cache.get(key)
+        if entry is None:
+            found: list[_AlphaMemory] = []
             index = self._alpha_index
             for probe in (key, (akey, _ANY, acc), (_ANY, vkey, acc), (_ANY, _ANY, acc)):
                 amems = index.get(probe)
@@ -2071,8 +2081,8 @@ class Rete:
                     found.extend(amems)
             if len(self._alpha_cache) >= _ALPHA_CACHE_LIMIT:
                 self._alpha_cache.clear()
-            self._alpha_cache[key] = found
-        return found
+            entry = self._alpha_cache[key] = (found, all(a.accept is None for a in found))
+        return entry
 
     def _alpha_memory(self, plan: _Plan) -> _AlphaMemory:
         amem = self._amems.get(plan.alpha_key)
@@ -2086,7 +2096,7 @@ class Rete:
         for wme, info in self._wme_info.items():
             if self._alpha_accepts(amem, wme):
                 amem.add(wme)
-                info[0].append(amem)
+                info[0] = [*info[0], amem]  # a new list: it may be shared (see add_wme)
         return amem
 
     @staticmethod
@@ -2110,7 +2120,8 @@ class Rete:
             del self._alpha_index[amem.lookup]
         self._alpha_cache.clear()
         for wme in amem.wmes:
-            self._wme_info[wme][0].remove(amem)
+            info = self._wme_info[wme]
+            info[0] = [other for other in info[0] if other is not amem]  # may be shared
 
     # ----- building -----
 
