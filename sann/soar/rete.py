@@ -558,6 +558,7 @@ class BruteForceMatcher:
 _FLOAT = object()  # hash keys of floats are (_FLOAT, x): 1.0 must never meet 1 in a join
 _ANY = object()  # alpha index: no constant test on this field
 _IDENT = object()  # alpha cache: any identifier
+_UNTESTED = object()  # alpha cache: any value no alpha memory tests for
 _FIELDS = ("id", "attr", "value")
 _GET = {name: attrgetter(name) for name in _FIELDS}
 _INDEX_PREFERENCE = {"id": 0, "value": 1, "attr": 2}
@@ -1863,6 +1864,10 @@ class Rete:
         self._stale: set[str] = set()  # built before an attribute they check became volatile
         self._amems: dict[tuple, _AlphaMemory] = {}
         self._alpha_index: dict[tuple, list[_AlphaMemory]] = {}
+        # constant values that alpha memories test for -> how many do: a WME whose value
+        # is none of them is cached under _UNTESTED, so a fresh number (a counter's next
+        # value) does not miss the cache
+        self._tested_values: dict[object, int] = {}
         self._alpha_cache: dict[tuple, tuple[list[_AlphaMemory], bool]] = {}
         # per WME: [alpha memories, tokens built on it, negative tokens it blocks]
         self._wme_info: dict[WME, list] = {}
@@ -1948,9 +1953,10 @@ class Rete:
         if wme in self._wme_info:
             raise ValueError(f"{wme!r} is already in working memory")
         attr, value = wme.attr, wme.value  # _alpha_entry's cache key, looked up inline
-        entry = self._alpha_cache.get((_IDENT if attr.__class__ is Identifier else attr,
-                                       _IDENT if value.__class__ is Identifier else value,
-                                       wme.acceptable))
+        entry = self._alpha_cache.get((
+            _IDENT if attr.__class__ is Identifier else attr,
+            value if value in self._tested_values else _UNTESTED,  # an identifier never is
+            wme.acceptable))
         found, plain = entry if entry is not None else self._alpha_entry(wme)
         if plain:
             # No memory here filters further: the WME enters them all, and the cache's list
@@ -2069,7 +2075,7 @@ class Rete:
         a further test (then the WME enters them all), cached per key."""
         attr, value, acc = wme.attr, wme.value, wme.acceptable
         akey = _IDENT if attr.__class__ is Identifier else attr
-        vkey = _IDENT if value.__class__ is Identifier else value
+        vkey = value if value in self._tested_values else _UNTESTED
         key = (akey, vkey, acc)
         entry = self._alpha_cache.get(key)
         if entry is None:
@@ -2092,6 +2098,9 @@ class Rete:
                             _compile_alpha(plan.alpha_tests))
         self._amems[plan.alpha_key] = amem
         self._alpha_index.setdefault(plan.lookup, []).append(amem)
+        value_key = plan.lookup[1]
+        if value_key is not _ANY:
+            self._tested_values[value_key] = self._tested_values.get(value_key, 0) + 1
         self._alpha_cache.clear()
         for wme, info in self._wme_info.items():
             if self._alpha_accepts(amem, wme):
@@ -2114,6 +2123,13 @@ class Rete:
 
     def _drop_alpha_memory(self, amem: _AlphaMemory) -> None:
         del self._amems[amem.key]
+        value_key = amem.lookup[1]
+        if value_key is not _ANY:
+            count = self._tested_values[value_key] - 1
+            if count:
+                self._tested_values[value_key] = count
+            else:
+                del self._tested_values[value_key]
         siblings = self._alpha_index[amem.lookup]
         siblings.remove(amem)
         if not siblings:
