@@ -1142,7 +1142,7 @@ def _compile_query(levels: list[tuple], seed: int) -> Callable[[tuple, WME | Non
     lines = ["def solve(v0, seed):"]
     depth = 1
     matched: list[str] = []
-    for k, (wmes, index, pos, getter, check, fields, negated) in enumerate(levels):
+    for k, (wmes, index, pos, getter, check, fields, negated, _) in enumerate(levels):
         pad = "    " * depth
         namespace.update({f"W{k}": wmes, f"I{k}": index, f"G{k}": getter, f"C{k}": check})
         lines += _bucket_lines(k, pad, f"v{k}", pos, k == seed)
@@ -1183,7 +1183,7 @@ class _QueryNCCNode(_Node):
     it back to the query.  Conjunctive negations with a nested one keep the subnetwork."""
 
     __slots__ = ("levels", "width", "owners", "owner_index", "amems", "owner_tests",
-                 "solvers")
+                 "seed_filters", "solvers")
 
     def __init__(self, rete: Rete, parent: _Node, key: object, levels: list[tuple],
                  width: int, amems: list[_AlphaMemory],
@@ -1192,11 +1192,14 @@ class _QueryNCCNode(_Node):
         self.amems = amems
         # per inner condition, in join order:
         # (amem.wmes, hash index or None, vals position or -1, getter, check, fields bound,
-        #  negated)
+        #  negated, equality tests as (field, vals position))
         self.levels = levels
         self.width = width  # the parent tokens' number of values
         # per inner condition: its equality tests against parent values, (getter, position)
         self.owner_tests = owner_tests
+        # per inner condition: (getter, hashed alpha memory) pairs that a WME entering it
+        # must find itself in to be part of any inner match (see _seed_filters)
+        self.seed_filters = _seed_filters(levels, width, amems, owner_tests)
         # solvers[0](vals, None): one match of the inner conditions as (vals, wmes), or
         # None; solvers[k + 1](vals, wme): one in which inner condition k matches wme
         self.solvers = [_compile_query(levels, seed) if seed < 0 or not levels[seed][6] else None
@@ -1287,7 +1290,7 @@ class _QueryNCCNode(_Node):
 
     def inner_added(self, k: int, wme: WME) -> None:
         if self.levels[k][6]:  # negated: the witnesses it matches are no longer results
-            _, _, pos, getter, check, _, _ = self.levels[k]
+            _, _, pos, getter, check, _, _, _ = self.levels[k]
             for tok in self._candidates(k, wme):
                 found = tok[5]
                 if found is None or tok[3] is None:
@@ -1298,6 +1301,12 @@ class _QueryNCCNode(_Node):
                 if check is None or check(vals, wme):
                     self.recheck(tok)
             return
+        for getter, index in self.seed_filters[k]:
+            key = getter(wme)
+            if key.__class__ is float:
+                key = (_FLOAT, key)
+            if key not in index:
+                return  # joins with no WME of another inner condition: blocks nobody
         for tok in self._candidates(k, wme):
             if tok[5] is None and tok[3] is not None:
                 found = self.solvers[k + 1](tok[2], wme)
@@ -1311,6 +1320,41 @@ class _QueryNCCNode(_Node):
                 found = self.solvers[0](tok[2], None)
                 if found is not None:
                     self._block(tok, found)
+
+
+def _seed_filters(levels: list[tuple], width: int, amems: list[_AlphaMemory],
+                  owner_tests: list[list[tuple[Callable, int]]]
+                  ) -> list[list[tuple[Callable, dict]]]:
+    """Semi-join filters for the WMEs that enter a query NCC's inner conditions.
+
+    A WME entering inner condition k is tried against every unblocked owner token that
+    could use it, a search each; when k tests no owner value, that is every owner.  But
+    when k tests a field against a variable that another positive inner condition j binds
+    (or j tests a field against one that k binds), no inner match can use the WME unless
+    some WME of j's alpha memory has the same value in the corresponding field: one hash
+    lookup rules out a search per owner (in the block planner, every output command and
+    operator name entering ``(<above> ^name <m>)`` and ``(<il> ^block <above>)``).
+    Conditions that test an owner value already narrow their candidates by hash and get no
+    filter.  ``levels`` are as in :class:`_QueryNCCNode`; ``levels[k][7]`` are their
+    equality tests ``(field, vals position)``."""
+    bound_at: dict[int, tuple[int, str]] = {}
+    position = width
+    for j, level in enumerate(levels):
+        for field in level[5]:
+            bound_at[position] = (j, field)
+            position += 1
+    filters: list[list[tuple[Callable, dict]]] = [[] for _ in levels]
+    for k, level in enumerate(levels):
+        if level[6]:  # a negated condition needs no match
+            continue
+        for field, p in level[7]:
+            if p in bound_at and bound_at[p][0] != k:
+                j, bound_field = bound_at[p]
+                if not owner_tests[k]:
+                    filters[k].append((_GET[field], amems[j].index(bound_field)))
+                if not owner_tests[j]:
+                    filters[j].append((_GET[bound_field], amems[k].index(field)))
+    return filters
 
 
 def _joins_within(plan: _Plan, base: int, amem: _AlphaMemory, run: list[tuple]) -> bool:
@@ -2288,11 +2332,11 @@ class Rete:
             else:
                 pos, field = plan.index
                 getter, hashed = _GET[field], amem.index(field)
-            levels.append((amem.wmes, hashed, pos, getter, _compile_check(plan.beta),
-                           fields, negated))
             equalities = [] if plan.index is None else [(plan.index[1], plan.index[0])]
             equalities += [(left[1], right[1]) for left, op, right in plan.beta
                            if op == "=" and left[0] == "w" and right[0] == "v"]
+            levels.append((amem.wmes, hashed, pos, getter, _compile_check(plan.beta),
+                           fields, negated, tuple(equalities)))
             owner_tests.append([(_GET[field], p) for field, p in equalities if p < width])
             shape.append((id(amem), plan.index, tuple(plan.beta), fields, negated))
             amems.append(amem)

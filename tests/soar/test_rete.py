@@ -315,6 +315,26 @@ def test_ncc_inner_negation_invalidates_and_restores_witnesses(world: World) -> 
     assert world.values("r", "n") == ["u", "v"]
 
 
+@pytest.mark.parametrize("order", [("name", "on", "block"), ("on", "block", "name"),
+                                   ("block", "name", "on")])
+def test_ncc_blocks_whatever_order_its_inner_wmes_arrive_in(world: World, order) -> None:
+    """A conjunctive negation's inner match completes with whichever WME comes last: one
+    arriving before the WMEs it joins with is rejected by the Rete's semi-join filter
+    (no inner WME shares its value), the last one is tried against the owners."""
+    target, above = world.new(), world.new()
+    world.add(world.s1, "block", target)
+    world.add(target, "name", "t")
+    world.add(target, "on", "table")
+    world.rule("(state <s> ^block <b>) (<b> ^name <n>)"
+               " -{(<s> ^block <a>) (<a> ^on <n> ^name <m>)}")
+    wmes = {"name": (above, "name", "u"), "on": (above, "on", "t"),
+            "block": (world.s1, "block", above)}
+    for attr in order:
+        assert "t" in world.values("r", "n"), f"blocked before {attr} arrived"
+        world.add(*wmes[attr])
+    assert world.values("r", "n") == ["u"]
+
+
 def test_runs_match_in_any_arrival_order(world: World) -> None:
     """Consecutive independent tests (one node in the Rete) give one match per combination
     of WMEs, whichever arrives first, and lose it when any of them goes."""
