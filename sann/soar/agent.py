@@ -788,14 +788,7 @@ class Agent:
         """Kernel order of match creation: by the newest matched WME; for one WME, by the
         alpha memory that passed it (the kernel visits ``(* ^attr *)`` before
         ``(* ^attr value)``), then the later-loaded production first."""
-        # A plain loop: for these short tuples it beats max(filter(...), key=...) by 2x.
-        newest = 0
-        index = -1
-        i = 0
-        for wme in match.wmes:  # type: ignore[attr-defined]
-            if wme is not None and wme.timetag > newest:
-                newest, index = wme.timetag, i
-            i += 1
+        newest, index = match.newest  # type: ignore[attr-defined]
         info = self._productions.get(match.production.name)  # type: ignore[attr-defined]
         if info is None:
             return (newest, 0, 0)
