@@ -1512,43 +1512,51 @@ class _ProductionNode(_Node):
 
 
 class _Layout:
-    """Where a production's WMEs and variables sit in its tokens."""
+    """Where a production's WMEs and variables sit in its tokens.
 
-    __slots__ = ("levels", "size", "bindings")
+    ``wmes_of`` and ``bindings_of`` are generated for the production (on first use) as
+    straight-line code: every fired match needs both, and a loop over the levels that
+    tests each one's kind costs twice as much."""
 
-    def __init__(self, levels: list[tuple[int, ...]], bindings: list[tuple[str, int]]) -> None:
+    __slots__ = ("levels", "size", "bindings", "positive", "wmes_of", "bindings_of")
+
+    def __init__(self, levels: list[tuple[int, ...]], bindings: list[tuple[str, int]],
+                 positive: set[int]) -> None:
         # levels[k] = written indices of the elements matched at token level k: one, or
         # several for a run of independent conditions (whose token holds a tuple of WMEs)
         self.levels = levels[::-1]
         self.size = sum(len(level) for level in levels)
         self.bindings = bindings
+        self.positive = positive  # written indices of the positive conditions
+        self.wmes_of: Callable[[_Token], tuple[tuple, tuple[int, int]]] = self._compile_wmes
+        self.bindings_of: Callable[[_Token], dict[str, Symbol]] = self._compile_bindings
 
-    def wmes_of(self, tok: _Token) -> tuple[tuple[WME | None, ...], tuple[int, int]]:
-        """A match's WMEs in written order, and ``Match.newest`` found on the way (the
-        agent orders new matches by it: one walk instead of two)."""
-        out: list[WME | None] = [None] * self.size
-        newest, at = 0, -1
-        for level in self.levels:
-            wme = tok[1]
-            if len(level) == 1:
-                if wme is not None:
-                    index = level[0]
-                    out[index] = wme
-                    timetag = wme.timetag
-                    if timetag >= newest and (timetag > newest or index < at):
-                        newest, at = timetag, index
-            else:
-                for index, member in zip(level, wme, strict=True):
-                    out[index] = member
-                    timetag = member.timetag
-                    if timetag >= newest and (timetag > newest or index < at):
-                        newest, at = timetag, index
-            tok = tok[0]
-        return tuple(out), (newest, at)
+    def _compile_wmes(self, tok: _Token) -> tuple[tuple, tuple[int, int]]:
+        """Generate ``wmes_of``: a match's WMEs in written order (``None`` for negations),
+        and ``Match.newest`` (the first index of the newest WME, found in written order)."""
+        lines = ["def wmes_of(tok):"]
+        last = len(self.levels) - 1
+        for k, level in enumerate(self.levels):
+            if len(level) > 1:
+                lines.append(f"    {', '.join(f'w{i}' for i in level)}, = tok[1]")
+            elif level[0] in self.positive:
+                lines.append(f"    w{level[0]} = tok[1]")
+            if k < last:
+                lines.append("    tok = tok[0]")
+        lines.append("    newest, at = 0, -1")
+        for i in sorted(self.positive):
+            lines.append(f"    if w{i}.timetag > newest: newest, at = w{i}.timetag, {i}")
+        written = "".join(f"w{i}, " if i in self.positive else "None, " for i in range(self.size))
+        lines.append(f"    return ({written}), (newest, at)")
+        self.wmes_of = _define(lines, {}, "wmes_of")  # type: ignore[method-assign]
+        return self.wmes_of(tok)
 
-    def bindings_of(self, tok: _Token) -> dict[str, Symbol]:
-        vals = tok[2]
-        return {name: vals[pos] for name, pos in self.bindings}
+    def _compile_bindings(self, tok: _Token) -> dict[str, Symbol]:
+        """Generate ``bindings_of``: the variables' values as a dict literal."""
+        items = "".join(f"{name!r}: v[{pos}], " for name, pos in self.bindings)
+        lines = ["def bindings_of(tok):", "    v = tok[2]", f"    return {{{items}}}"]
+        self.bindings_of = _define(lines, {}, "bindings_of")  # type: ignore[method-assign]
+        return self.bindings_of(tok)
 
 
 # ----- compiling conditions -------------------------------------------------------------------
@@ -2008,7 +2016,10 @@ class Rete:
         var_pos: dict[str, int] = {}
         bottom, levels = self._build_scope(conditions, self._root, var_pos, 0, scope,
                                            _singletons(production), set(), runs=True)
-        layout = _Layout(levels, sorted((n, p) for n, p in var_pos.items() if n in scope))
+        positive = {i for i, element in enumerate(conditions)
+                    if isinstance(element, Condition) and not element.negated}
+        layout = _Layout(levels, sorted((n, p) for n, p in var_pos.items() if n in scope),
+                         positive)
         pnode = _ProductionNode(self, bottom, production, layout)
         bottom.children.append(pnode)
         self._pnodes[production.name] = pnode
