@@ -15,6 +15,8 @@ from __future__ import annotations
 
 from collections.abc import Callable, Container, Sequence
 from dataclasses import dataclass
+from functools import lru_cache
+from types import CodeType
 from typing import TYPE_CHECKING
 
 from .errors import SoarError, SoarRuntimeError
@@ -188,6 +190,13 @@ def compile_actions(
     return _RhsCompiler(name, bound).build(actions)
 
 
+@lru_cache(maxsize=2048)
+def _compiled(source: str, name: str) -> CodeType:
+    """Compiled actions, shared by every agent with the same rule (the source names the
+    rule's constants only through the namespace it is run in)."""
+    return compile(source, f"<actions of {name}>", "exec")
+
+
 class _RhsCompiler:
     """Generates the source of `compile_actions`'s function, straight-line per action so
     that evaluation order (and so identifier numbering and output) is the interpreter's."""
@@ -226,7 +235,7 @@ class _RhsCompiler:
             reader = "b[{}]" if var in self.bound else "b.get({})"
             head.append(f"    {local} = {reader.format(self._const(var))}")
         source = "\n".join(head + body) + "\n"
-        exec(compile(source, f"<actions of {self.name}>", "exec"), self.namespace)
+        exec(_compiled(source, self.name), self.namespace)  # noqa: S102 -- generated
         return self.namespace["program"]  # type: ignore[return-value]
 
     def _const(self, value: object) -> str:

@@ -33,7 +33,9 @@ Matching follows the real Soar 9.6 kernel (checked with ``soar_sml``):
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator
+from functools import lru_cache
 from operator import attrgetter
+from types import CodeType
 
 from sann.soar.errors import SoarSemanticError
 from sann.soar.memory import WME, Identifier, Symbol
@@ -1137,9 +1139,16 @@ class _PartnerNode(_Node):
 
 def _define(lines: list[str], namespace: dict[str, object], name: str) -> Callable:
     """Compile generated source (built from the Rete's own plans, never from rule text as
-    code) and return the function it defines."""
-    exec("\n".join(lines), namespace)  # noqa: S102 -- generated from our own plans only
+    code) and return the function it defines.  The source names its node's data only
+    through ``namespace``, so equal sources share one compiled code object: the second
+    agent built from the same rules (a notebook re-run, a test) compiles nothing."""
+    exec(_compiled("\n".join(lines)), namespace)  # noqa: S102 -- our own plans only
     return namespace[name]  # type: ignore[return-value]
+
+
+@lru_cache(maxsize=4096)
+def _compiled(source: str) -> CodeType:
+    return compile(source, "<rete>", "exec")
 
 
 def _bucket_lines(k: int, pad: str, vals: str, pos: int, seeded: bool) -> list[str]:
