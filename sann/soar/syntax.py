@@ -854,10 +854,17 @@ def parse_partial(
     parser, transformer = _parser()
     if text.startswith("\ufeff"):  # a byte-order mark: white space, so columns stay right
         text = " " + text[1:]
+    key = (text, file, frozenset(functions))
     with _LOCK:
+        done = _PARSED.get(key)
+        if done is not None:
+            return list(done), None
         transformer.reset(text, file, functions)
         try:
-            return parser.parse(text), None
+            items = parser.parse(text)
+            if not transformer.warnings:  # a file that warns warns again when re-read
+                _remember(key, tuple(items))
+            return items, None
         except (UnexpectedToken, UnexpectedCharacters, UnexpectedEOF) as error:
             return transformer.completed, _from_lark(error, text, file)
         except (SoarSyntaxError, SoarSemanticError) as error:
@@ -871,6 +878,18 @@ def parse_partial(
             transformer.completed = []
             for message in pending:
                 warnings.warn(message, SoarWarning, stacklevel=_caller_stacklevel())
+
+
+# Parsed texts (productions and commands are frozen dataclasses, so agents can share them):
+# re-sourcing an unchanged file, as a notebook re-run does, skips the parser.
+_PARSED: dict[tuple[str, str, frozenset[str]], tuple[Production | Command, ...]] = {}
+_PARSED_LIMIT = 256
+
+
+def _remember(key: tuple[str, str, frozenset[str]], items: tuple) -> None:
+    if len(_PARSED) >= _PARSED_LIMIT:
+        del _PARSED[next(iter(_PARSED))]  # the oldest
+    _PARSED[key] = items
 
 
 def parse_file(path: str | Path, functions: Collection[str] = KNOWN_RHS_FUNCTIONS) -> list:

@@ -714,3 +714,23 @@ def test_highlighting_lexer_token_kinds() -> None:
     assert kinds["<s>"] in Name.Variable and kinds["b"] in Name.Attribute
     assert kinds["|x y|"] in String and kinds["1.5"] in Number.Float
     assert kinds["# note"] in Comment and kinds[">"] in Operator and kinds["+"] in Name.Builtin
+
+
+def test_an_unchanged_text_is_parsed_once_and_warnings_come_back() -> None:
+    """Re-sourcing an unchanged file (a notebook re-run) reuses its parse: equal items in a
+    fresh list, the productions themselves shared (they are immutable); a text that warns is
+    parsed again so that it warns again; another file name or RHS function set is another
+    parse (errors and locations name the file)."""
+    text = (ROOT / "rules" / "hanoi.soar").read_text()
+    first = parse(text, "hanoi.soar")
+    first.append("scribble")
+    second = parse(text, "hanoi.soar")
+    assert second == first[:-1] and all(a is b for a, b in zip(first, second, strict=False))
+    elsewhere = parse(text, "other.soar")
+    assert elsewhere == second and elsewhere[0] is not second[0]
+    assert elsewhere[0].location.file == "other.soar"
+    for _ in range(2):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            parse("sp {p (state <s> ^type state) --> (<s> ^f g ~)}")
+        assert [w.category for w in caught] == [SoarWarning]
