@@ -1399,12 +1399,15 @@ def _joins_within(plan: _Plan, base: int, amem: _AlphaMemory, run: list[tuple]) 
     return all(other is not amem for _, _, other in run)
 
 
-def _compile_run(members: list[tuple], seed: int) -> Callable[[tuple, WME | None], list]:
-    """Every combination of WMEs matching a run of independent conditions given a token's
-    values, as ``(values extended by what they bind, WMEs)``, in nested loops; member
-    ``seed`` (if any) may only match the WME passed in (it was just added)."""
-    namespace: dict[str, object] = {"FLOAT": _FLOAT, "same": same_symbol}
-    lines = ["def combos(vals, seed):", "    out = []"]
+def _compile_run(node: _RunNode, seed: int) -> Callable[[_Token, WME | None], None]:
+    """Make the node's tokens below parent token ``t``: one per combination of WMEs matching
+    its run of independent conditions given ``t``'s values, found in nested loops (member
+    ``seed``, if any, may only match the WME passed in: it was just added), each token
+    adopted, registered with its WMEs and stored as it is found."""
+    members = node.members
+    namespace: dict[str, object] = {"FLOAT": _FLOAT, "same": same_symbol, "Tok": _Token,
+                                    "N": node, "R": node.registry, "STORE": node.store}
+    lines = ["def make(t, seed):", "    vals = t[2]"]
     depth = 1
     for k, (_, index, pos, getter, check, _) in enumerate(members):
         pad = "    " * depth
@@ -1417,10 +1420,14 @@ def _compile_run(members: list[tuple], seed: int) -> Callable[[tuple, WME | None
     pad = "    " * depth
     bound = "".join(f"w{k}.{field}, " for k, member in enumerate(members) for field in member[5])
     wmes = "".join(f"w{k}, " for k in range(len(members)))
-    lines.append(f"{pad}out.append((vals + ({bound}), ({wmes})))" if bound else
-                 f"{pad}out.append((vals, ({wmes})))")
-    lines.append("    return out")
-    return _define(lines, namespace, "combos")
+    lines += [f"{pad}tok = Tok((t, ({wmes}), {f'vals + ({bound})' if bound else 'vals'},"
+              " N, None, None))",
+              f"{pad}s = t[4]",
+              f"{pad}if s is None: t[4] = {{tok: None}}",
+              f"{pad}else: s[tok] = None"]
+    lines += [f"{pad}R[w{k}][1][tok] = None" for k in range(len(members))]
+    lines.append(f"{pad}STORE(tok)")
+    return _define(lines, namespace, "make")
 
 
 class _RunNode(_Node):
@@ -1435,7 +1442,7 @@ class _RunNode(_Node):
     geometry rules every pair of blocks goes through six filters; as a chain they made three
     tokens per pair."""
 
-    __slots__ = ("members", "amems", "combos", "registry")
+    __slots__ = ("members", "amems", "makers", "registry")
 
     def __init__(self, rete: Rete, parent: _Node, key: object, members: list[tuple]) -> None:
         super().__init__(rete, parent, key)
@@ -1444,14 +1451,14 @@ class _RunNode(_Node):
         self.members = members
         self.amems = [member[0] for member in members]
         self.registry = rete._wme_info
-        # combos[0]: every combination; combos[k + 1]: those with condition k matching a WME
-        self.combos = [_compile_run(members, seed) for seed in range(-1, len(members))]
+        # makers[0]: every combination; makers[k + 1]: those with condition k matching a WME
+        self.makers = [_compile_run(self, seed) for seed in range(-1, len(members))]
         for member in members:
             parent.index(member[2])
 
     def activation(self, amem: _AlphaMemory) -> Callable[[WME], None]:
         k = self.amems.index(amem)
-        seeded = self.combos[k + 1]
+        seeded = self.makers[k + 1]
         parent_index = self.parent.index(self.members[k][2])  # type: ignore[union-attr]
         getter = self.members[k][3]
 
@@ -1462,21 +1469,12 @@ class _RunNode(_Node):
             bucket = parent_index.get(key)
             if bucket:
                 for t in list(bucket):
-                    self._make(t, seeded(t[2], wme))
+                    seeded(t, wme)
 
         return right_activate
 
     def left_activate(self, t: _Token) -> None:
-        self._make(t, self.combos[0](t[2], None))
-
-    def _make(self, t: _Token, found: list[tuple]) -> None:
-        registry = self.registry
-        for vals, wmes in found:
-            tok = _Token((t, wmes, vals, self, None, None))
-            _adopt(t, tok)
-            for wme in wmes:
-                registry[wme][1][tok] = None
-            self.store(tok)
+        self.makers[0](t, None)
 
     def forget(self, tok: _Token) -> None:
         _Node.forget(self, tok)
