@@ -44,12 +44,18 @@ class IdentifierFactory:
 
     def __init__(self) -> None:
         self._counters: defaultdict[str, int] = defaultdict(int)
+        self._letters: dict[object, str] = {}  # hint -> letter (the same few hints recur)
 
     def new(self, hint: object = "I", level: int | None = None) -> Identifier:
-        text = str(hint)
-        letter = text[0].upper() if text and text[0].isalpha() else "I"
-        self._counters[letter] += 1
-        return Identifier(letter, self._counters[letter], level)
+        letter = self._letters.get(hint)
+        if letter is None:
+            text = str(hint)
+            letter = text[0].upper() if text and text[0].isalpha() else "I"
+            if type(hint) is str:
+                self._letters[hint] = letter
+        number = self._counters[letter] + 1
+        self._counters[letter] = number
+        return Identifier(letter, number, level)
 
     def reset(self) -> None:
         self._counters.clear()
