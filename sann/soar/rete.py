@@ -824,11 +824,15 @@ class _Node:
 
 class _JoinNode(_Node):
     """Joins parent tokens with the WMEs of an alpha memory, hashed on one equality test.
-    Both activations build the new tokens inline: this is the innermost loop of the
-    matcher."""
 
-    __slots__ = ("amem", "pos", "getter", "amem_index", "parent_index", "check", "extend",
-                 "grow", "registry", "left", "right")
+    This is the innermost loop of the matcher, so both activations are generated for the
+    node as straight-line code (its test, what a new token binds and the indices on its
+    tokens are fixed when it is compiled).  They are compiled on first use, and again after
+    an index is added to the node's memory; the alpha memory then picks up the new
+    ``right_activate``."""
+
+    __slots__ = ("amem", "pos", "field", "check", "extend", "registry", "left_activate",
+                 "right_activate")
 
     def __init__(self, rete: Rete, parent: _Node, key: object, amem: _AlphaMemory,
                  index: tuple[int, str] | None, check: Callable | None,
@@ -837,96 +841,73 @@ class _JoinNode(_Node):
         self.amem = amem
         self.check = check
         self.extend = extend
-        # 0: binds nothing, 1: binds the value (most joins), 2: anything else (extend)
-        self.grow = 0 if extend is None else 1 if extend is _EXTEND_VALUE else 2
         self.registry = rete._wme_info
-        if index is None:
-            self.pos = -1
-            self.getter = None
-            self.amem_index = None
-            self.parent_index = None
-        else:
-            self.pos, field = index
-            self.getter = _GET[field]
-            self.amem_index = amem.index(field)
-            self.parent_index = parent.index(self.pos)
-        # Everything a left activation reads, in one tuple: one attribute load instead of ten.
-        self.left = (self.pos, self.amem_index if index is not None else amem.wmes, check,
-                     extend, self.grow, self.registry, self.tokens, self.index_list,
-                     self.children)
-        self.right = (self.getter, self.parent_index if index is not None else parent.tokens,
-                      check, extend, self.grow, self.registry, self.tokens, self.index_list,
-                      self.children)
+        self.pos, self.field = (-1, "") if index is None else index
+        if index is not None:  # the hashes both activations look up
+            amem.index(self.field)
+            parent.index(self.pos)
+        self.left_activate: Callable[[_Token], None] = self._compile_then_left
+        self.right_activate: Callable[[WME], None] = self._compile_then_right
 
-    def left_activate(self, t: _Token) -> None:
-        vals = t[2]
-        pos, bucket, check, extend, grow, registry, tokens, index_list, children = self.left
-        if pos >= 0:
-            key = vals[pos]
-            if key.__class__ is float:
-                key = (_FLOAT, key)
-            bucket = bucket.get(key)
-            if bucket is None:
-                return
-        for wme in bucket:
-            if check is not None and not check(vals, wme):
-                continue
-            new = vals if grow == 0 else vals + (wme.value,) if grow == 1 else extend(vals, wme)
-            tok = _Token((t, wme, new, self, None, None))
-            siblings = t[4]
-            if siblings is None:
-                t[4] = {tok: None}
-            else:
-                siblings[tok] = None
-            registry[wme][1][tok] = None
-            tokens[tok] = None
-            for pos, index in index_list:
-                key = new[pos]
-                if key.__class__ is float:
-                    key = (_FLOAT, key)
-                same = index.get(key)
-                if same is None:
-                    index[key] = {tok: None}
-                else:
-                    same[tok] = None
-            for child in children:
-                child.left_activate(tok)
+    def index(self, pos: int) -> dict:
+        known = pos in self.indexes
+        index = super().index(pos)
+        if not known:  # the generated code updates the indices it knew of
+            self.left_activate = self._compile_then_left
+            self.right_activate = self._compile_then_right
+            self.amem._relink()
+        return index
 
-    def right_activate(self, wme: WME) -> None:
-        getter, bucket, check, extend, grow, registry, tokens, index_list, children = self.right
-        if getter is not None:
-            key = getter(wme)
-            if key.__class__ is float:
-                key = (_FLOAT, key)
-            bucket = bucket.get(key)
-            if bucket is None:
-                return
-        built = registry[wme][1]
-        bound = wme.value if grow == 1 else None
-        for t in bucket:
-            vals = t[2]
-            if check is not None and not check(vals, wme):
-                continue
-            new = vals if grow == 0 else vals + (bound,) if grow == 1 else extend(vals, wme)
-            tok = _Token((t, wme, new, self, None, None))
-            siblings = t[4]
-            if siblings is None:
-                t[4] = {tok: None}
-            else:
-                siblings[tok] = None
-            built[tok] = None
-            tokens[tok] = None
-            for pos, index in index_list:
-                key = new[pos]
-                if key.__class__ is float:
-                    key = (_FLOAT, key)
-                same = index.get(key)
-                if same is None:
-                    index[key] = {tok: None}
-                else:
-                    same[tok] = None
-            for child in children:
-                child.left_activate(tok)
+    def _compile_then_left(self, t: _Token) -> None:
+        self._compile()
+        self.left_activate(t)
+
+    def _compile_then_right(self, wme: WME) -> None:
+        self._compile()
+        self.right_activate(wme)
+
+    def _compile(self) -> None:
+        hashed = self.pos >= 0
+        namespace: dict[str, object] = {
+            "FLOAT": _FLOAT, "Tok": _Token, "N": self, "C": self.check, "E": self.extend,
+            "R": self.registry, "T": self.tokens, "CH": self.children,
+            "AB": self.amem.indexes[self.field] if hashed else self.amem.wmes,
+            "PB": self.parent.indexes[self.pos] if hashed else self.parent.tokens,  # type: ignore[union-attr]
+        }
+        grow = ("vals" if self.extend is None else "vals + (wme.value,)"
+                if self.extend is _EXTEND_VALUE else "E(vals, wme)")
+
+        def body(register: str) -> list[str]:
+            """Test the pair, make the token, register, index and pass it on."""
+            lines = [] if self.check is None else ["if not C(vals, wme): continue"]
+            lines += [f"new = {grow}", "tok = Tok((t, wme, new, N, None, None))", "s = t[4]",
+                      "if s is None: t[4] = {tok: None}", "else: s[tok] = None", register,
+                      "T[tok] = None"]
+            for k, (pos, index) in enumerate(self.index_list):
+                namespace[f"I{k}"] = index
+                lines += [f"key = new[{pos}]", "if key.__class__ is float: key = (FLOAT, key)",
+                          f"b = I{k}.get(key)", f"if b is None: I{k}[key] = {{tok: None}}",
+                          "else: b[tok] = None"]
+            lines += ["for child in CH:", "    child.left_activate(tok)"]
+            return ["        " + line for line in lines]
+
+        left = ["def left_activate(t):", "    vals = t[2]"]
+        if hashed:
+            left += [f"    key = vals[{self.pos}]",
+                     "    if key.__class__ is float: key = (FLOAT, key)",
+                     "    bucket = AB.get(key)", "    if bucket is None: return"]
+        left += [f"    for wme in {'bucket' if hashed else 'AB'}:"] + body("R[wme][1][tok] = None")
+        right = ["def right_activate(wme):"]
+        if hashed:
+            right.append(f"    key = wme.{self.field}")
+            if self.field != "id":  # identifiers are never floats
+                right.append("    if key.__class__ is float: key = (FLOAT, key)")
+            right += ["    bucket = PB.get(key)", "    if bucket is None: return"]
+        right += ["    built = R[wme][1]", f"    for t in {'bucket' if hashed else 'PB'}:",
+                  "        vals = t[2]"] + body("built[tok] = None")
+        self.left_activate = _define(left, namespace, "left_activate")
+        self.right_activate = _define(right, namespace, "right_activate")
+        self.amem._relink()  # the alpha memory calls the compiled right_activate from now on
 
 
 class _NegativeNode(_Node):
@@ -1143,7 +1124,9 @@ def _define(lines: list[str], namespace: dict[str, object], name: str) -> Callab
     through ``namespace``, so equal sources share one compiled code object: the second
     agent built from the same rules (a notebook re-run, a test) compiles nothing."""
     exec(_compiled("\n".join(lines)), namespace)  # noqa: S102 -- our own plans only
-    return namespace[name]  # type: ignore[return-value]
+    # Taken out of its own globals: a function that named itself there would be a reference
+    # cycle, left to the cyclic garbage collector when the code is regenerated.
+    return namespace.pop(name)  # type: ignore[return-value]
 
 
 @lru_cache(maxsize=4096)
