@@ -2435,16 +2435,18 @@ class Rete:
     def _delete_tokens(self, stack: list[_Token]) -> None:
         """Delete tokens (already detached from their parents) and all their descendants.
         A token is marked dead (node None) before its descendants are visited, which an NCC
-        owner relies on (see _NCCNode.release).  Join-node tokens, the bulk, are dropped
-        inline."""
+        owner relies on (see _NCCNode.release).  The tokens of join and run nodes, the bulk,
+        and of production nodes are dropped inline."""
         info = self._wme_info
-        join = _JoinNode
+        join, run, production = _JoinNode, _RunNode, _ProductionNode
+        added, removed = self._changes.added, self._changes.removed
         while stack:
             tok = stack.pop()
             node = tok[3]
             if node is None:
                 continue
-            if node.__class__ is join:
+            kind = node.__class__
+            if kind is join or kind is run:
                 del node.tokens[tok]
                 if node.index_list:
                     vals = tok[2]
@@ -2456,9 +2458,25 @@ class Rete:
                         del bucket[tok]
                         if not bucket:
                             del index[key]
-                record = info.get(tok[1])
-                if record is not None:
-                    del record[1][tok]
+                if kind is join:
+                    record = info.get(tok[1])
+                    if record is not None:
+                        del record[1][tok]
+                else:
+                    for wme in tok[1]:
+                        record = info.get(wme)
+                        if record is not None:
+                            record[1].pop(tok, None)
+            elif kind is production:  # _ProductionNode.forget, inline
+                del node.tokens[tok]
+                match = tok[5]
+                if match is not None:
+                    if match in added:
+                        del added[match]
+                    else:
+                        removed[match] = None
+                tok[3] = None
+                continue
             else:
                 node.forget(tok)
             tok[3] = None
