@@ -1382,16 +1382,24 @@ def _joins_within(plan: _Plan, base: int, amem: _AlphaMemory, run: list[tuple]) 
     return all(other is not amem for _, _, other in run)
 
 
-def _compile_run(node: _RunNode, seed: int) -> Callable[[_Token, WME | None], None]:
-    """Make the node's tokens below parent token ``t``: one per combination of WMEs matching
-    its run of independent conditions given ``t``'s values, found in nested loops (member
-    ``seed``, if any, may only match the WME passed in: it was just added), each token
-    adopted, registered with its WMEs and stored as it is found."""
+def _compile_run(node: _RunNode, seed: int) -> Callable:
+    """Generate what makes a run node's tokens: one per combination of WMEs matching its run
+    of independent conditions, found in nested loops, each token adopted, registered with
+    its WMEs and stored as it is found.  ``seed`` < 0: ``make(t)``, every combination
+    below a new parent token ``t``; otherwise ``right_activate(seed)``, the combinations in
+    which member ``seed`` matches the WME just added, below every parent token it joins."""
     members = node.members
     namespace: dict[str, object] = {"FLOAT": _FLOAT, "same": same_symbol, "Tok": _Token,
                                     "N": node, "R": node.registry, "STORE": node.store}
-    lines = ["def make(t, seed):", "    vals = t[2]"]
-    depth = 1
+    if seed < 0:
+        lines, depth = ["def make(t):", "    vals = t[2]"], 1
+    else:
+        namespace["PI"] = node.parent.index(members[seed][2])  # type: ignore[union-attr]
+        lines = ["def right_activate(seed):", f"    key = G{seed}(seed)",
+                 "    if key.__class__ is float: key = (FLOAT, key)",
+                 "    bucket = PI.get(key)", "    if not bucket: return",
+                 "    for t in list(bucket):", "        vals = t[2]"]
+        depth = 2
     for k, (_, index, pos, getter, check, _) in enumerate(members):
         pad = "    " * depth
         namespace.update({f"I{k}": index, f"G{k}": getter, f"C{k}": check})
@@ -1410,7 +1418,7 @@ def _compile_run(node: _RunNode, seed: int) -> Callable[[_Token, WME | None], No
               f"{pad}else: s[tok] = None"]
     lines += [f"{pad}R[w{k}][1][tok] = None" for k in range(len(members))]
     lines.append(f"{pad}STORE(tok)")
-    return _define(lines, namespace, "make")
+    return _define(lines, namespace, "make" if seed < 0 else "right_activate")
 
 
 class _RunNode(_Node):
@@ -1434,30 +1442,17 @@ class _RunNode(_Node):
         self.members = members
         self.amems = [member[0] for member in members]
         self.registry = rete._wme_info
-        # makers[0]: every combination; makers[k + 1]: those with condition k matching a WME
-        self.makers = [_compile_run(self, seed) for seed in range(-1, len(members))]
         for member in members:
             parent.index(member[2])
+        # makers[0](t): every combination below a parent token; makers[k + 1](wme): those
+        # with condition k matching a new WME (the right activation for its alpha memory)
+        self.makers = [_compile_run(self, seed) for seed in range(-1, len(members))]
 
     def activation(self, amem: _AlphaMemory) -> Callable[[WME], None]:
-        k = self.amems.index(amem)
-        seeded = self.makers[k + 1]
-        parent_index = self.parent.index(self.members[k][2])  # type: ignore[union-attr]
-        getter = self.members[k][3]
-
-        def right_activate(wme: WME) -> None:
-            key = getter(wme)
-            if key.__class__ is float:
-                key = (_FLOAT, key)
-            bucket = parent_index.get(key)
-            if bucket:
-                for t in list(bucket):
-                    seeded(t, wme)
-
-        return right_activate
+        return self.makers[self.amems.index(amem) + 1]
 
     def left_activate(self, t: _Token) -> None:
-        self.makers[0](t, None)
+        self.makers[0](t)
 
     def forget(self, tok: _Token) -> None:
         _Node.forget(self, tok)
