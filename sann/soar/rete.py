@@ -1137,8 +1137,9 @@ def _compiled(source: str) -> CodeType:
 def _bucket_lines(k: int, pad: str, vals: str, pos: int, seeded: bool) -> list[str]:
     """Generated code: ``b<k>`` = the WMEs of condition ``k`` hashed on ``vals[pos]`` (its
     alpha memory ``W<k>`` when ``pos`` < 0), or just the seed WME when it fits."""
-    if seeded:
-        test = f"same({vals}[{pos}], G{k}(seed))" if pos >= 0 else "True"
+    if seeded:  # same_symbol(vals[pos], the seed's field), inline
+        test = (f"(x := {vals}[{pos}]).__class__ is (y := G{k}(seed)).__class__ and x == y"
+                if pos >= 0 else "True")
         return [f"{pad}b{k} = (seed,) if {test} else ()"]
     if pos < 0:
         return [f"{pad}b{k} = W{k}"]
@@ -1152,7 +1153,7 @@ def _compile_query(levels: list[tuple], seed: int) -> Callable[[tuple, WME | Non
     any) matching only the WME passed in: the search runs for every parent token that
     could change, and generated loops cost a third of an interpreted walk over the levels.
     """
-    namespace: dict[str, object] = {"FLOAT": _FLOAT, "same": same_symbol}
+    namespace: dict[str, object] = {"FLOAT": _FLOAT}
     lines = ["def solve(v0, seed):"]
     depth = 1
     matched: list[str] = []
@@ -1389,7 +1390,7 @@ def _compile_run(node: _RunNode, seed: int) -> Callable:
     below a new parent token ``t``; otherwise ``right_activate(seed)``, the combinations in
     which member ``seed`` matches the WME just added, below every parent token it joins."""
     members = node.members
-    namespace: dict[str, object] = {"FLOAT": _FLOAT, "same": same_symbol, "Tok": _Token,
+    namespace: dict[str, object] = {"FLOAT": _FLOAT, "Tok": _Token,
                                     "N": node, "R": node.registry, "STORE": node.store}
     if seed < 0:
         lines, depth = ["def make(t):", "    vals = t[2]"], 1
