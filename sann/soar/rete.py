@@ -601,7 +601,9 @@ def _typed(value: object) -> tuple[str, object]:
     return (value.__class__.__name__, value)
 
 
-def _index_add(index: dict, key: object, item: object) -> None:
+def _index_add(index: dict, value: object, item: object) -> None:
+    """File ``item`` under ``value`` (hashed as ``_hkey`` does, inline: this is hot)."""
+    key = (_FLOAT, value) if value.__class__ is float else value
     bucket = index.get(key)
     if bucket is None:
         index[key] = {item: None}
@@ -609,7 +611,8 @@ def _index_add(index: dict, key: object, item: object) -> None:
         bucket[item] = None
 
 
-def _index_remove(index: dict, key: object, item: object) -> None:
+def _index_remove(index: dict, value: object, item: object) -> None:
+    key = (_FLOAT, value) if value.__class__ is float else value
     bucket = index[key]
     del bucket[item]
     if not bucket:
@@ -739,7 +742,7 @@ class _AlphaMemory:
             index = {}
             getter = _GET[field]
             for wme in self.wmes:
-                _index_add(index, _hkey(getter(wme)), wme)
+                _index_add(index, getter(wme), wme)
             self.indexes[field] = index
             self.index_list.append((getter, index))
             self._stale()
@@ -749,7 +752,7 @@ class _AlphaMemory:
         """Store a WME without activating anything (a new memory taking in working memory)."""
         self.wmes[wme] = None
         for getter, index in self.index_list:
-            _index_add(index, _hkey(getter(wme)), wme)
+            _index_add(index, getter(wme), wme)
 
 
 class _Node:
@@ -773,7 +776,7 @@ class _Node:
         if index is None:
             index = {}
             for tok in self.tokens:
-                _index_add(index, _hkey(tok[2][pos]), tok)
+                _index_add(index, tok[2][pos], tok)
             self.indexes[pos] = index
             self.index_list.append((pos, index))
         return index
@@ -940,9 +943,9 @@ class _NegativeNode(_Node):
         _adopt(t, tok)
         self.every[tok] = None
         if self.pos >= 0:
-            key = _hkey(vals[self.pos])
-            _index_add(self.every_index, key, tok)
-            bucket = self.amem_index.get(key)
+            value = vals[self.pos]
+            _index_add(self.every_index, value, tok)
+            bucket = self.amem_index.get((_FLOAT, value) if value.__class__ is float else value)
         else:
             bucket = self.amem.wmes
         blockers = None
@@ -988,7 +991,7 @@ class _NegativeNode(_Node):
     def forget(self, tok: _Token) -> None:
         del self.every[tok]
         if self.pos >= 0:
-            _index_remove(self.every_index, _hkey(tok[2][self.pos]), tok)
+            _index_remove(self.every_index, tok[2][self.pos], tok)
         if tok[5] is None:
             self.unstore(tok)
             return
@@ -1236,7 +1239,7 @@ class _QueryNCCNode(_Node):
         _adopt(t, tok)
         self.owners[t] = tok
         for pos, index in self.owner_index.items():
-            _index_add(index, _hkey(vals[pos]), tok)
+            _index_add(index, vals[pos], tok)
         found = self.solvers[0](vals, None)
         if found is None:
             self.store(tok)
@@ -1247,7 +1250,7 @@ class _QueryNCCNode(_Node):
         del self.owners[tok[0]]
         vals = tok[2]
         for pos, index in self.owner_index.items():
-            _index_remove(index, _hkey(vals[pos]), tok)
+            _index_remove(index, vals[pos], tok)
         if tok[5] is None:
             self.unstore(tok)
         else:
