@@ -15,10 +15,9 @@ from __future__ import annotations
 
 from collections.abc import Callable, Container, Sequence
 from dataclasses import dataclass
-from functools import lru_cache
-from types import CodeType
 from typing import TYPE_CHECKING
 
+from .codegen import define
 from .errors import SoarError, SoarRuntimeError
 from .memory import WME, Identifier, Symbol
 from .preferences import Preference, preference_type
@@ -190,13 +189,6 @@ def compile_actions(
     return _RhsCompiler(name, bound).build(actions)
 
 
-@lru_cache(maxsize=2048)
-def _compiled(source: str, name: str) -> CodeType:
-    """Compiled actions, shared by every agent with the same rule (the source names the
-    rule's constants only through the namespace it is run in)."""
-    return compile(source, f"<actions of {name}>", "exec")
-
-
 class _RhsCompiler:
     """Generates the source of `compile_actions`'s function, straight-line per action so
     that evaluation order (and so identifier numbering and output) is the interpreter's."""
@@ -234,9 +226,7 @@ class _RhsCompiler:
         for var, local in self.locals.items():
             reader = "b[{}]" if var in self.bound else "b.get({})"
             head.append(f"    {local} = {reader.format(self._const(var))}")
-        source = "\n".join(head + body) + "\n"
-        exec(_compiled(source, self.name), self.namespace)  # noqa: S102 -- generated
-        return self.namespace["program"]  # type: ignore[return-value]
+        return define(head + body, self.namespace, "program", f"<actions of {self.name}>")
 
     def _const(self, value: object) -> str:
         key = f"K{len(self.namespace)}"

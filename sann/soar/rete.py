@@ -33,10 +33,9 @@ Matching follows the real Soar 9.6 kernel (checked with ``soar_sml``):
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator
-from functools import lru_cache
 from operator import attrgetter
-from types import CodeType
 
+from sann.soar.codegen import define
 from sann.soar.errors import SoarSemanticError
 from sann.soar.memory import WME, Identifier, Symbol
 from sann.soar.production import (
@@ -650,16 +649,15 @@ class _AlphaMemory:
     """The WMEs that pass one condition's constant tests, with hash indices on the fields
     the join nodes below test."""
 
-    __slots__ = ("key", "lookup", "accept", "wmes", "indexes", "index_list", "successors",
-                 "activations", "listeners", "on_add", "on_remove")
+    __slots__ = ("key", "lookup", "accept", "wmes", "indexes", "successors", "activations",
+                 "listeners", "on_add", "on_remove")
 
     def __init__(self, key: tuple, lookup: tuple, accept: Callable[[WME], bool] | None) -> None:
         self.key = key
         self.lookup = lookup
         self.accept = accept
         self.wmes: dict[WME, None] = {}
-        self.indexes: dict[str, dict] = {}
-        self.index_list: list[tuple[Callable, dict]] = []
+        self.indexes: dict[str, dict] = {}  # field -> hash index on it
         self.successors: list[_Node] = []
         # (right_activate, parent memory) per successor: a node whose parent memory is empty
         # has nothing to join with, so add_wme skips the call (Doorenbos's right unlinking,
@@ -719,22 +717,17 @@ class _AlphaMemory:
         remove = ["def on_remove(wme):", "    del W[wme]"]
         for k, (field, index) in enumerate(self.indexes.items()):
             namespace[f"I{k}"] = index
-            key = [f"    key = wme.{field}"]
-            if field != "id":  # identifiers are never floats
-                key.append("    if key.__class__ is float: key = (FLOAT, key)")
-            add += key + [f"    b = I{k}.get(key)",
-                          f"    if b is None: I{k}[key] = {{wme: None}}",
-                          "    else: b[wme] = None"]
-            remove += key + [f"    b = I{k}[key]", "    del b[wme]",
-                             f"    if not b: del I{k}[key]"]
+            add += _filing_lines(f"I{k}", f"wme.{field}", "wme", "    ", field != "id")
+            remove += _key_lines(f"wme.{field}", "    ", field != "id") + [
+                f"    b = I{k}[key]", "    del b[wme]", f"    if not b: del I{k}[key]"]
         for k, (activate, parent_tokens) in enumerate(self.activations):
             namespace[f"P{k}"], namespace[f"R{k}"] = parent_tokens, activate
             add.append(f"    if P{k}: R{k}(wme)")
         for k, (node, level) in enumerate(self.listeners):
             namespace[f"O{k}"], namespace[f"L{k}"] = node.owners, node.inner_added
             add.append(f"    if O{k}: L{k}({level}, wme)")
-        self.on_add = _define(add, namespace, "on_add")  # type: ignore[method-assign]
-        self.on_remove = _define(remove, dict(namespace), "on_remove")  # type: ignore[method-assign]
+        self.on_add = define(add, namespace, "on_add")  # type: ignore[method-assign]
+        self.on_remove = define(remove, dict(namespace), "on_remove")  # type: ignore[method-assign]
 
     def index(self, field: str) -> dict:
         index = self.indexes.get(field)
@@ -744,15 +737,14 @@ class _AlphaMemory:
             for wme in self.wmes:
                 _index_add(index, getter(wme), wme)
             self.indexes[field] = index
-            self.index_list.append((getter, index))
             self._stale()
         return index
 
     def add(self, wme: WME) -> None:
         """Store a WME without activating anything (a new memory taking in working memory)."""
         self.wmes[wme] = None
-        for getter, index in self.index_list:
-            _index_add(index, getter(wme), wme)
+        for field, index in self.indexes.items():
+            _index_add(index, _GET[field](wme), wme)
 
 
 class _Node:
@@ -858,7 +850,7 @@ class _JoinNode(_Node):
         if not known:  # the generated code updates the indices it knew of
             self.left_activate = self._compile_then_left
             self.right_activate = self._compile_then_right
-            self.amem._relink()
+            self.amem._relink()  # it holds the right activation
         return index
 
     def _compile_then_left(self, t: _Token) -> None:
@@ -888,9 +880,7 @@ class _JoinNode(_Node):
                       "T[tok] = None"]
             for k, (pos, index) in enumerate(self.index_list):
                 namespace[f"I{k}"] = index
-                lines += [f"key = new[{pos}]", "if key.__class__ is float: key = (FLOAT, key)",
-                          f"b = I{k}.get(key)", f"if b is None: I{k}[key] = {{tok: None}}",
-                          "else: b[tok] = None"]
+                lines += _filing_lines(f"I{k}", f"new[{pos}]", "tok", "", True)
             lines += ["for child in CH:", "    child.left_activate(tok)"]
             return ["        " + line for line in lines]
 
@@ -908,8 +898,8 @@ class _JoinNode(_Node):
             right += ["    bucket = PB.get(key)", "    if bucket is None: return"]
         right += ["    built = R[wme][1]", f"    for t in {'bucket' if hashed else 'PB'}:",
                   "        vals = t[2]"] + body("built[tok] = None")
-        self.left_activate = _define(left, namespace, "left_activate")
-        self.right_activate = _define(right, namespace, "right_activate")
+        self.left_activate = define(left, namespace, "left_activate")
+        self.right_activate = define(right, namespace, "right_activate")
         self.amem._relink()  # the alpha memory calls the compiled right_activate from now on
 
 
@@ -1000,6 +990,23 @@ class _NegativeNode(_Node):
             record = info.get(wme)
             if record is not None and record[2]:
                 record[2].pop(tok, None)
+
+
+def _key_lines(value: str, pad: str, floats: bool) -> list[str]:
+    """Generated code: ``key`` = the hash key of ``value`` (see ``_hkey``); an identifier
+    field (``floats`` false) is never a float."""
+    lines = [f"{pad}key = {value}"]
+    if floats:
+        lines.append(f"{pad}if key.__class__ is float: key = (FLOAT, key)")
+    return lines
+
+
+def _filing_lines(index: str, value: str, item: str, pad: str, floats: bool) -> list[str]:
+    """Generated code: file ``item`` under ``value`` in the hash index ``index`` (what
+    ``_index_add`` does, inline)."""
+    return _key_lines(value, pad, floats) + [
+        f"{pad}b = {index}.get(key)", f"{pad}if b is None: {index}[key] = {{{item}: None}}",
+        f"{pad}else: b[{item}] = None"]
 
 
 def _unlink_tokens(root: _Token) -> None:
@@ -1121,22 +1128,6 @@ class _PartnerNode(_Node):
             self.ncc.release(owner, result)
 
 
-def _define(lines: list[str], namespace: dict[str, object], name: str) -> Callable:
-    """Compile generated source (built from the Rete's own plans, never from rule text as
-    code) and return the function it defines.  The source names its node's data only
-    through ``namespace``, so equal sources share one compiled code object: the second
-    agent built from the same rules (a notebook re-run, a test) compiles nothing."""
-    exec(_compiled("\n".join(lines)), namespace)  # noqa: S102 -- our own plans only
-    # Taken out of its own globals: a function that named itself there would be a reference
-    # cycle, left to the cyclic garbage collector when the code is regenerated.
-    return namespace.pop(name)  # type: ignore[return-value]
-
-
-@lru_cache(maxsize=4096)
-def _compiled(source: str) -> CodeType:
-    return compile(source, "<rete>", "exec")
-
-
 def _bucket_lines(k: int, pad: str, vals: str, pos: int, seeded: bool) -> list[str]:
     """Generated code: ``b<k>`` = the WMEs of condition ``k`` hashed on ``vals[pos]`` (its
     alpha memory ``W<k>`` when ``pos`` < 0), or just the seed WME when it fits."""
@@ -1181,7 +1172,7 @@ def _compile_query(levels: list[tuple], seed: int) -> Callable[[tuple, WME | Non
     pad = "    " * depth
     lines.append(f"{pad}return v{len(levels)}, ({''.join(w + ', ' for w in matched)})")
     lines.append("    return None")
-    return _define(lines, namespace, "solve")
+    return define(lines, namespace, "solve")
 
 
 class _QueryNCCNode(_Node):
@@ -1422,7 +1413,7 @@ def _compile_run(node: _RunNode, seed: int) -> Callable:
               f"{pad}else: s[tok] = None"]
     lines += [f"{pad}R[w{k}][1][tok] = None" for k in range(len(members))]
     lines.append(f"{pad}STORE(tok)")
-    return _define(lines, namespace, "make" if seed < 0 else "right_activate")
+    return define(lines, namespace, "make" if seed < 0 else "right_activate")
 
 
 class _RunNode(_Node):
@@ -1537,14 +1528,14 @@ class _Layout:
             lines.append(f"    if w{i}.timetag > newest: newest, at = w{i}.timetag, {i}")
         written = "".join(f"w{i}, " if i in self.positive else "None, " for i in range(self.size))
         lines.append(f"    return ({written}), (newest, at)")
-        self.wmes_of = _define(lines, {}, "wmes_of")  # type: ignore[method-assign]
+        self.wmes_of = define(lines, {}, "wmes_of")  # type: ignore[method-assign]
         return self.wmes_of(tok)
 
     def _compile_bindings(self, tok: _Token) -> dict[str, Symbol]:
         """Generate ``bindings_of``: the variables' values as a dict literal."""
         items = "".join(f"{name!r}: v[{pos}], " for name, pos in self.bindings)
         lines = ["def bindings_of(tok):", "    v = tok[2]", f"    return {{{items}}}"]
-        self.bindings_of = _define(lines, {}, "bindings_of")  # type: ignore[method-assign]
+        self.bindings_of = define(lines, {}, "bindings_of")  # type: ignore[method-assign]
         return self.bindings_of(tok)
 
 
@@ -1600,7 +1591,7 @@ def _compile_alpha(specs: list[tuple]) -> Callable[[WME], bool] | None:
             namespace[f"d{n}"] = frozenset(spec[2])
             lines.append(f"    if (x.__class__.__name__, x) not in d{n}: return False")
     lines.append("    return True")
-    return _define(lines, namespace, "accept")
+    return define(lines, namespace, "accept")
 
 
 _NUMBERS = frozenset((int, float))
@@ -1636,7 +1627,7 @@ def _compile_check(specs: list[BetaSpec]) -> Callable[[tuple, WME], bool] | None
             raise AssertionError(f"unknown relation {op!r}")
     lines.append("    return True")
     namespace: dict[str, object] = {"NUMBERS": _NUMBERS, "RELATIONS": _RELATIONS}
-    return _define(lines, namespace, "check")
+    return define(lines, namespace, "check")
 
 
 def _EXTEND_VALUE(vals: tuple, w: WME) -> tuple:  # noqa: N802 -- a marker as much as a function
@@ -2030,12 +2021,12 @@ class Rete:
             self._flush()
         if wme in self._wme_info:
             raise ValueError(f"{wme!r} is already in working memory")
-        attr, value = wme.attr, wme.value  # _alpha_entry's cache key, looked up inline
-        entry = self._alpha_cache.get((
-            _IDENT if attr.__class__ is Identifier else attr,
-            value if value in self._tested_values else _UNTESTED,  # an identifier never is
-            wme.acceptable))
-        found, plain = entry if entry is not None else self._alpha_entry(wme)
+        attr, value = wme.attr, wme.value
+        key = (_IDENT if attr.__class__ is Identifier else attr,
+               value if value in self._tested_values else _UNTESTED,  # an identifier never is
+               wme.acceptable)
+        entry = self._alpha_cache.get(key)
+        found, plain = entry if entry is not None else self._alpha_entry(key)
         if plain:
             # No memory here filters further: the WME enters them all, and the cache's list
             # (never mutated, see _alpha_memory) is its record of them.
@@ -2148,24 +2139,18 @@ class Rete:
 
     # ----- alpha network -----
 
-    def _alpha_entry(self, wme: WME) -> tuple[list[_AlphaMemory], bool]:
-        """The alpha memories whose lookup key fits the WME, and whether none of them has
-        a further test (then the WME enters them all), cached per key."""
-        attr, value, acc = wme.attr, wme.value, wme.acceptable
-        akey = _IDENT if attr.__class__ is Identifier else attr
-        vkey = value if value in self._tested_values else _UNTESTED
-        key = (akey, vkey, acc)
-        entry = self._alpha_cache.get(key)
-        if entry is None:
-            found: list[_AlphaMemory] = []
-            index = self._alpha_index
-            for probe in (key, (akey, _ANY, acc), (_ANY, vkey, acc), (_ANY, _ANY, acc)):
-                amems = index.get(probe)
-                if amems:
-                    found.extend(amems)
-            if len(self._alpha_cache) >= _ALPHA_CACHE_LIMIT:
-                self._alpha_cache.clear()
-            entry = self._alpha_cache[key] = (found, all(a.accept is None for a in found))
+    def _alpha_entry(self, key: tuple) -> tuple[list[_AlphaMemory], bool]:
+        """For an alpha cache key (see add_wme): the alpha memories whose lookup key fits,
+        and whether none of them has a further test (then a WME enters them all); cached."""
+        akey, vkey, acc = key
+        found: list[_AlphaMemory] = []
+        for probe in (key, (akey, _ANY, acc), (_ANY, vkey, acc), (_ANY, _ANY, acc)):
+            amems = self._alpha_index.get(probe)
+            if amems:
+                found.extend(amems)
+        if len(self._alpha_cache) >= _ALPHA_CACHE_LIMIT:
+            self._alpha_cache.clear()
+        entry = self._alpha_cache[key] = (found, all(a.accept is None for a in found))
         return entry
 
     def _alpha_memory(self, plan: _Plan) -> _AlphaMemory:
@@ -2434,18 +2419,16 @@ class Rete:
     def _delete_tokens(self, stack: list[_Token]) -> None:
         """Delete tokens (already detached from their parents) and all their descendants.
         A token is marked dead (node None) before its descendants are visited, which an NCC
-        owner relies on (see _NCCNode.release).  The tokens of join and run nodes, the bulk,
-        and of production nodes are dropped inline."""
+        owner relies on (see _NCCNode.release).  Join-node tokens, the bulk, are dropped
+        inline."""
         info = self._wme_info
-        join, run, production = _JoinNode, _RunNode, _ProductionNode
-        added, removed = self._changes.added, self._changes.removed
+        join = _JoinNode
         while stack:
             tok = stack.pop()
             node = tok[3]
             if node is None:
                 continue
-            kind = node.__class__
-            if kind is join or kind is run:
+            if node.__class__ is join:
                 del node.tokens[tok]
                 if node.index_list:
                     vals = tok[2]
@@ -2457,25 +2440,9 @@ class Rete:
                         del bucket[tok]
                         if not bucket:
                             del index[key]
-                if kind is join:
-                    record = info.get(tok[1])
-                    if record is not None:
-                        del record[1][tok]
-                else:
-                    for wme in tok[1]:
-                        record = info.get(wme)
-                        if record is not None:
-                            record[1].pop(tok, None)
-            elif kind is production:  # _ProductionNode.forget, inline
-                del node.tokens[tok]
-                match = tok[5]
-                if match is not None:
-                    if match in added:
-                        del added[match]
-                    else:
-                        removed[match] = None
-                tok[3] = None
-                continue
+                record = info.get(tok[1])
+                if record is not None:
+                    del record[1][tok]
             else:
                 node.forget(tok)
             tok[3] = None
