@@ -864,7 +864,7 @@ class _JoinNode(_Node):
     def _compile(self) -> None:
         hashed = self.pos >= 0
         namespace: dict[str, object] = {
-            "FLOAT": _FLOAT, "Tok": _Token, "N": self, "C": self.check, "E": self.extend,
+            **_CHECK_NAMES, "FLOAT": _FLOAT, "Tok": _Token, "N": self, "E": self.extend,
             "R": self.registry, "T": self.tokens, "CH": self.children,
             "AB": self.amem.indexes[self.field] if hashed else self.amem.wmes,
             "PB": self.parent.indexes[self.pos] if hashed else self.parent.tokens,  # type: ignore[union-attr]
@@ -874,7 +874,8 @@ class _JoinNode(_Node):
 
         def body(register: str) -> list[str]:
             """Test the pair, make the token, register, index and pass it on."""
-            lines = [] if self.check is None else ["if not C(vals, wme): continue"]
+            lines = [] if self.check is None else _check_lines(
+                self.check.specs, "vals", "wme", "continue", "")  # type: ignore[attr-defined]
             lines += [f"new = {grow}", "tok = Tok((t, wme, new, N, None, None))", "s = t[4]",
                       "if s is None: t[4] = {tok: None}", "else: s[tok] = None", register,
                       "T[tok] = None"]
@@ -1147,23 +1148,22 @@ def _compile_query(levels: list[tuple], seed: int) -> Callable[[tuple, WME | Non
     any) matching only the WME passed in: the search runs for every parent token that
     could change, and generated loops cost a third of an interpreted walk over the levels.
     """
-    namespace: dict[str, object] = {"FLOAT": _FLOAT}
+    namespace: dict[str, object] = {**_CHECK_NAMES, "FLOAT": _FLOAT}
     lines = ["def solve(v0, seed):"]
     depth = 1
     matched: list[str] = []
     for k, (wmes, index, pos, getter, check, fields, negated, _) in enumerate(levels):
         pad = "    " * depth
-        namespace.update({f"W{k}": wmes, f"I{k}": index, f"G{k}": getter, f"C{k}": check})
+        namespace.update({f"W{k}": wmes, f"I{k}": index, f"G{k}": getter})
         lines += _bucket_lines(k, pad, f"v{k}", pos, k == seed)
         lines.append(f"{pad}for w{k} in b{k}:")
         inner = pad + "    "
+        tests = [] if check is None else _check_lines(check.specs, f"v{k}", f"w{k}", "continue",
+                                                      inner)
         if negated:
-            lines.append(f"{inner}if {'True' if check is None else f'C{k}(v{k}, w{k})'}: break")
-            lines.append(f"{pad}else:")
-            lines.append(f"{inner}v{k + 1} = v{k}")
+            lines += tests + [f"{inner}break", f"{pad}else:", f"{inner}v{k + 1} = v{k}"]
         else:
-            if check is not None:
-                lines.append(f"{inner}if not C{k}(v{k}, w{k}): continue")
+            lines += tests
             bound = "".join(f"w{k}.{field}, " for field in fields)
             lines.append(f"{inner}v{k + 1} = v{k} + ({bound})" if bound else
                          f"{inner}v{k + 1} = v{k}")
@@ -1384,7 +1384,7 @@ def _compile_run(node: _RunNode, seed: int) -> Callable:
     below a new parent token ``t``; otherwise ``right_activate(seed)``, the combinations in
     which member ``seed`` matches the WME just added, below every parent token it joins."""
     members = node.members
-    namespace: dict[str, object] = {"FLOAT": _FLOAT, "Tok": _Token,
+    namespace: dict[str, object] = {**_CHECK_NAMES, "FLOAT": _FLOAT, "Tok": _Token,
                                     "N": node, "R": node.registry, "STORE": node.store}
     if seed < 0:
         lines, depth = ["def make(t):", "    vals = t[2]"], 1
@@ -1397,11 +1397,11 @@ def _compile_run(node: _RunNode, seed: int) -> Callable:
         depth = 2
     for k, (_, index, pos, getter, check, _) in enumerate(members):
         pad = "    " * depth
-        namespace.update({f"I{k}": index, f"G{k}": getter, f"C{k}": check})
+        namespace.update({f"I{k}": index, f"G{k}": getter})
         lines += _bucket_lines(k, pad, "vals", pos, k == seed)
         lines.append(f"{pad}for w{k} in b{k}:")
         if check is not None:
-            lines.append(f"{pad}    if not C{k}(vals, w{k}): continue")
+            lines += _check_lines(check.specs, "vals", f"w{k}", "continue", pad + "    ")
         depth += 1
     pad = "    " * depth
     bound = "".join(f"w{k}.{field}, " for k, member in enumerate(members) for field in member[5])
@@ -1596,38 +1596,49 @@ def _compile_alpha(specs: list[tuple]) -> Callable[[WME], bool] | None:
 
 _NUMBERS = frozenset((int, float))
 _ORDER_OPS = {"<": "<", ">": ">", "<=": "<=", ">=": ">="}
+_CHECK_NAMES: dict[str, object] = {"NUMBERS": _NUMBERS, "RELATIONS": _RELATIONS}
+
+
+def _check_lines(specs: list[BetaSpec], vals: str, w: str, fail: str, pad: str) -> list[str]:
+    """Generated code testing every beta test of a join on the values ``vals`` and the WME
+    ``w``, running ``fail`` (``return False``, ``continue``) at the first that does not
+    hold.  The join and query loops inline these lines: in the innermost loop a call per
+    pair costs more than the tests themselves."""
+    lines = []
+    for n, ((lk, la), op, (rk, ra)) in enumerate(specs):
+        left = f"{w}.{la}" if lk == "w" else f"{vals}[{la}]"
+        right = f"{w}.{ra}" if rk == "w" else f"{vals}[{ra}]"
+        x, y = f"cx{n}", f"cy{n}"
+        lines.append(f"{x} = {left}; {y} = {right}")
+        if op == "=":
+            lines.append(f"if {x} is not {y} and not ({x}.__class__ is {y}.__class__ "
+                         f"and {x} == {y}): {fail}")
+        elif op == "<>":
+            lines.append(f"if {x} is {y} or ({x}.__class__ is {y}.__class__ "
+                         f"and {x} == {y}): {fail}")
+        elif op == "<=>":
+            lines.append(f"if {x}.__class__ is not {y}.__class__: {fail}")
+        elif op == "@":
+            lines.append(fail)
+        elif op in _ORDER_OPS:
+            lines.append(f"if {x}.__class__ in NUMBERS and {y}.__class__ in NUMBERS:")
+            lines.append(f"    if not ({x} {op} {y}): {fail}")
+            lines.append(f"elif not RELATIONS[{op!r}]({x}, {y}): {fail}")
+        elif op != "!@":
+            raise AssertionError(f"unknown relation {op!r}")
+    return [pad + line for line in lines]
 
 
 def _compile_check(specs: list[BetaSpec]) -> Callable[[tuple, WME], bool] | None:
-    """One Python function testing every beta test of a join: the tests run in the
-    innermost loop, where a call per test would cost more than the test itself."""
+    """One Python function testing every beta test of a join, for the nodes that call it
+    per WME; its ``specs`` attribute lets generated loops inline the same tests."""
     if not specs:
         return None
-    lines = ["def check(vals, w):"]
-    for n, ((lk, la), op, (rk, ra)) in enumerate(specs):
-        left = f"w.{la}" if lk == "w" else f"vals[{la}]"
-        right = f"w.{ra}" if rk == "w" else f"vals[{ra}]"
-        x, y = f"x{n}", f"y{n}"
-        lines.append(f"    {x} = {left}; {y} = {right}")
-        if op == "=":
-            lines.append(f"    if {x} is not {y} and not ({x}.__class__ is {y}.__class__ "
-                         f"and {x} == {y}): return False")
-        elif op == "<>":
-            lines.append(f"    if {x} is {y} or ({x}.__class__ is {y}.__class__ "
-                         f"and {x} == {y}): return False")
-        elif op == "<=>":
-            lines.append(f"    if {x}.__class__ is not {y}.__class__: return False")
-        elif op == "@":
-            lines.append("    return False")
-        elif op in _ORDER_OPS:
-            lines.append(f"    if {x}.__class__ in NUMBERS and {y}.__class__ in NUMBERS:")
-            lines.append(f"        if not ({x} {op} {y}): return False")
-            lines.append(f"    elif not RELATIONS[{op!r}]({x}, {y}): return False")
-        elif op != "!@":
-            raise AssertionError(f"unknown relation {op!r}")
-    lines.append("    return True")
-    namespace: dict[str, object] = {"NUMBERS": _NUMBERS, "RELATIONS": _RELATIONS}
-    return define(lines, namespace, "check")
+    lines = ["def check(vals, w):", *_check_lines(specs, "vals", "w", "return False", "    "),
+             "    return True"]
+    check = define(lines, dict(_CHECK_NAMES), "check")
+    check.specs = tuple(specs)  # type: ignore[attr-defined]
+    return check
 
 
 def _EXTEND_VALUE(vals: tuple, w: WME) -> tuple:  # noqa: N802 -- a marker as much as a function
