@@ -31,6 +31,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 import engine  # noqa: E402  (the scenes and the planner driver)
 
 from sann.soar.agent import Agent  # noqa: E402
+from sann.soar.instantiation import COMPILE_AFTER  # noqa: E402
 
 Key = tuple[str, str, int]  # (file name, function name, first line)
 
@@ -83,14 +84,18 @@ def hanoi(disks: int, top: int) -> None:
     counter.report("decision", decisions, top)
 
 
+WARM_UP = COMPILE_AFTER + 50  # scenes run before counting
+
+
 def blocks(scenes: int, top: int, seed: int) -> None:
-    """Count block scenes after 10 warm-up scenes (compiled actions and caches in place)."""
+    """Count block scenes after ``WARM_UP`` scenes, as in the steady state of engine.py's
+    2,000: by then every rule that fires once a scene has its actions compiled."""
     planner = engine.OurPlanner()
-    work = engine.make_scenes(scenes + 10, 26, seed)
-    for scene in work[:10]:
+    work = engine.make_scenes(scenes + WARM_UP, 26, seed)
+    for scene in work[:WARM_UP]:
         planner.solve(scene)
     counter = OpCounter()
-    counter.count(lambda: [planner.solve(scene) for scene in work[10:]])
+    counter.count(lambda: [planner.solve(scene) for scene in work[WARM_UP:]])
     print(f"(b) Blocks planner: {scenes} scenes counted")
     counter.report("scene", scenes, top)
 

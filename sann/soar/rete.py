@@ -220,6 +220,8 @@ class _Changes:
             self.removed[match] = None
 
     def take(self) -> tuple[list[Match], list[Match]]:
+        if not self.added and not self.removed:
+            return [], []
         added, removed = list(self.added), list(self.removed)
         self.added.clear()
         self.removed.clear()
@@ -2030,8 +2032,6 @@ class Rete:
     def add_wme(self, wme: WME) -> None:
         if self._pending:
             self._flush()
-        if wme in self._wme_info:
-            raise ValueError(f"{wme!r} is already in working memory")
         attr, value = wme.attr, wme.value
         key = (_IDENT if attr.__class__ is Identifier else attr,
                value if value in self._tested_values else _UNTESTED,  # an identifier never is
@@ -2041,12 +2041,16 @@ class Rete:
         if plain:
             # No memory here filters further: the WME enters them all, and the cache's list
             # (never mutated, see _alpha_memory) is its record of them.
-            self._wme_info[wme] = [found, {}, None, None]
+            record = [found, {}, None, None]
+            if self._wme_info.setdefault(wme, record) is not record:
+                raise ValueError(f"{wme!r} is already in working memory")
             for amem in found:
                 amem.on_add(wme)
             return
         amems: list[_AlphaMemory] = []
-        self._wme_info[wme] = [amems, {}, None, None]
+        record = [amems, {}, None, None]
+        if self._wme_info.setdefault(wme, record) is not record:
+            raise ValueError(f"{wme!r} is already in working memory")
         for amem in found:
             accept = amem.accept
             if accept is None or accept(wme):
@@ -2063,10 +2067,16 @@ class Rete:
             amem.on_remove(wme)
         built = info[1]
         if built:
+            # Detached from their parents first, then deleted in one walk (a token built on
+            # this WME below another one is detached from its still-live parent: each is
+            # deleted once).
+            doomed = []
             for tok in built:
                 if tok[3] is not None:
                     del tok[0][4][tok]
-                    self._delete_tokens([tok])
+                    doomed.append(tok)
+            doomed.reverse()  # the walk pops from the end: the first built goes first
+            self._delete_tokens(doomed)
         blocked = info[2]
         if blocked:
             for tok in blocked:
