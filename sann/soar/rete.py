@@ -1194,7 +1194,7 @@ class _QueryNCCNode(_Node):
     it back to the query.  Conjunctive negations with a nested one keep the subnetwork."""
 
     __slots__ = ("levels", "width", "owners", "owner_index", "amems", "owner_tests",
-                 "seed_filters", "solvers")
+                 "seed_filters", "solvers", "left_activate", "forget")
 
     def __init__(self, rete: Rete, parent: _Node, key: object, levels: list[tuple],
                  width: int, amems: list[_AlphaMemory],
@@ -1220,34 +1220,62 @@ class _QueryNCCNode(_Node):
         for tests in owner_tests:
             if tests:
                 self.owner_index.setdefault(tests[0][1], {})
+        # generated on first use, and again after an index is added to the node's tokens
+        self.left_activate: Callable[[_Token], None] = self._compile_then_left
+        self.forget: Callable[[_Token], None] = self._compile_then_forget
 
     def all_tokens(self) -> list[_Token]:
         return list(self.owners.values())
 
+    def index(self, pos: int) -> dict:
+        if pos not in self.indexes:
+            self.left_activate = self._compile_then_left
+            self.forget = self._compile_then_forget
+        return super().index(pos)
+
     # ----- parent tokens -----
 
-    def left_activate(self, t: _Token) -> None:
-        vals = t[2]
-        tok = _Token((t, None, vals, self, None, None))
-        _adopt(t, tok)
-        self.owners[t] = tok
-        for pos, index in self.owner_index.items():
-            _index_add(index, vals[pos], tok)
-        found = self.solvers[0](vals, None)
-        if found is None:
-            self.store(tok)
-        else:
-            self._witness(tok, found)
+    def _compile_then_left(self, t: _Token) -> None:
+        self._compile()
+        self.left_activate(t)
 
-    def forget(self, tok: _Token) -> None:
-        del self.owners[tok[0]]
-        vals = tok[2]
-        for pos, index in self.owner_index.items():
-            _index_remove(index, vals[pos], tok)
-        if tok[5] is None:
-            self.unstore(tok)
-        else:
-            self._unwitness(tok)
+    def _compile_then_forget(self, tok: _Token) -> None:
+        self._compile()
+        self.forget(tok)
+
+    def _compile(self) -> None:
+        """Generate ``left_activate`` (a parent token arrives: make its token, file it
+        among the owners, search once, then pass it on or keep the witness) and ``forget``
+        (its undoing) as straight-line code, with the node's indices fixed in it."""
+        namespace: dict[str, object] = {
+            "FLOAT": _FLOAT, "Tok": _Token, "N": self, "OWN": self.owners, "T": self.tokens,
+            "CH": self.children, "R": self.rete._wme_info, "SOLVE": self.solvers[0]}
+        left = ["def left_activate(t):", "    vals = t[2]",
+                "    tok = Tok((t, None, vals, N, None, None))", "    s = t[4]",
+                "    if s is None: t[4] = {tok: None}", "    else: s[tok] = None",
+                "    OWN[t] = tok"]
+        forget = ["def forget(tok):", "    del OWN[tok[0]]", "    vals = tok[2]"]
+        for k, (pos, index) in enumerate(self.owner_index.items()):
+            namespace[f"O{k}"] = index
+            left += _filing_lines(f"O{k}", f"vals[{pos}]", "tok", "    ", True)
+            forget += _key_lines(f"vals[{pos}]", "    ", True) + [
+                f"    b = O{k}[key]", "    del b[tok]", f"    if not b: del O{k}[key]"]
+        left += ["    found = SOLVE(vals, None)", "    if found is None:", "        T[tok] = None"]
+        forget += ["    found = tok[5]", "    if found is None:", "        del T[tok]"]
+        for k, (pos, index) in enumerate(self.index_list):
+            namespace[f"I{k}"] = index
+            left += _filing_lines(f"I{k}", f"vals[{pos}]", "tok", "        ", True)
+            forget += _key_lines(f"vals[{pos}]", "        ", True) + [
+                f"        b = I{k}[key]", "        del b[tok]", f"        if not b: del I{k}[key]"]
+        left += ["        for child in CH:", "            child.left_activate(tok)",
+                 "        return", "    tok[5] = found",  # blocked: register the witness
+                 "    for w in found[1]:", "        record = R[w]", "        s = record[3]",
+                 "        if s is None: record[3] = {tok: None}", "        else: s[tok] = None"]
+        forget += ["        return", "    for w in found[1]:", "        record = R.get(w)",
+                   "        if record is not None and record[3]: record[3].pop(tok, None)",
+                   "    tok[5] = None"]
+        self.left_activate = define(left, namespace, "left_activate")  # type: ignore[method-assign]
+        self.forget = define(forget, dict(namespace), "forget")  # type: ignore[method-assign]
 
     def _witness(self, tok: _Token, found: tuple[tuple, tuple]) -> None:
         tok[5] = found
