@@ -1415,7 +1415,8 @@ def _compile_run(node: _RunNode, seed: int) -> Callable:
     which member ``seed`` matches the WME just added, below every parent token it joins."""
     members = node.members
     namespace: dict[str, object] = {**_CHECK_NAMES, "FLOAT": _FLOAT, "Tok": _Token,
-                                    "N": node, "R": node.registry, "STORE": node.store}
+                                    "N": node, "R": node.registry, "T": node.tokens,
+                                    "CH": node.children}
     if seed < 0:
         lines, depth = ["def make(t):", "    vals = t[2]"], 1
     else:
@@ -1442,7 +1443,11 @@ def _compile_run(node: _RunNode, seed: int) -> Callable:
               f"{pad}if s is None: t[4] = {{tok: None}}",
               f"{pad}else: s[tok] = None"]
     lines += [f"{pad}R[w{k}][1][tok] = None" for k in range(len(members))]
-    lines.append(f"{pad}STORE(tok)")
+    lines.append(f"{pad}T[tok] = None")
+    for k, (pos, index) in enumerate(node.index_list):
+        namespace[f"X{k}"] = index
+        lines += _filing_lines(f"X{k}", f"tok[2][{pos}]", "tok", pad, True)
+    lines += [f"{pad}for child in CH:", f"{pad}    child.left_activate(tok)"]
     return define(lines, namespace, "make" if seed < 0 else "right_activate")
 
 
@@ -1471,7 +1476,21 @@ class _RunNode(_Node):
             parent.index(member[2])
         # makers[0](t): every combination below a parent token; makers[k + 1](wme): those
         # with condition k matching a new WME (the right activation for its alpha memory)
-        self.makers = [_compile_run(self, seed) for seed in range(-1, len(members))]
+        self.makers = self._compile()
+
+    def _compile(self) -> list[Callable]:
+        return [_compile_run(self, seed) for seed in range(-1, len(self.members))]
+
+    def index(self, pos: int) -> dict:
+        """The makers file new tokens in the node's indices: a new one means new makers,
+        and the alpha memories relink to their new right activations."""
+        known = pos in self.indexes
+        index = super().index(pos)
+        if not known:
+            self.makers = self._compile()
+            for amem in set(self.amems):
+                amem._relink()
+        return index
 
     def activation(self, amem: _AlphaMemory) -> Callable[[WME], None]:
         return self.makers[self.amems.index(amem) + 1]
