@@ -1463,7 +1463,7 @@ class _RunNode(_Node):
     geometry rules every pair of blocks goes through six filters; as a chain they made three
     tokens per pair."""
 
-    __slots__ = ("members", "amems", "makers", "registry")
+    __slots__ = ("members", "amems", "makers", "registry", "left_activate", "forget")
 
     def __init__(self, rete: Rete, parent: _Node, key: object, members: list[tuple]) -> None:
         super().__init__(rete, parent, key)
@@ -1474,12 +1474,29 @@ class _RunNode(_Node):
         self.registry = rete._wme_info
         for member in members:
             parent.index(member[2])
-        # makers[0](t): every combination below a parent token; makers[k + 1](wme): those
-        # with condition k matching a new WME (the right activation for its alpha memory)
-        self.makers = self._compile()
+        self.makers: list[Callable] = []
+        self.left_activate: Callable[[_Token], None]
+        self.forget: Callable[[_Token], None]
+        self._compile()
 
-    def _compile(self) -> list[Callable]:
-        return [_compile_run(self, seed) for seed in range(-1, len(self.members))]
+    def _compile(self) -> None:
+        """Generate the makers: ``makers[0](t)`` makes every combination below a parent
+        token (the left activation), ``makers[k + 1](wme)`` those with condition k matching
+        a new WME (the right activation for its alpha memory); and ``forget``, which drops a
+        token from the memory, its indices and its WMEs' records."""
+        self.makers = [_compile_run(self, seed) for seed in range(-1, len(self.members))]
+        self.left_activate = self.makers[0]
+        namespace: dict[str, object] = {"FLOAT": _FLOAT, "T": self.tokens, "R": self.registry}
+        lines = ["def forget(tok):", "    del T[tok]"]
+        for k, (pos, index) in enumerate(self.index_list):
+            namespace[f"I{k}"] = index
+            lines += _key_lines(f"tok[2][{pos}]", "    ", True) + [
+                f"    b = I{k}[key]", "    del b[tok]", f"    if not b: del I{k}[key]"]
+        wmes = [f"w{k}" for k in range(len(self.members))]
+        lines.append(f"    {', '.join(wmes)}, = tok[1]")
+        for w in wmes:
+            lines += [f"    r = R.get({w})", "    if r is not None: r[1].pop(tok, None)"]
+        self.forget = define(lines, namespace, "forget")
 
     def index(self, pos: int) -> dict:
         """The makers file new tokens in the node's indices: a new one means new makers,
@@ -1487,24 +1504,13 @@ class _RunNode(_Node):
         known = pos in self.indexes
         index = super().index(pos)
         if not known:
-            self.makers = self._compile()
+            self._compile()
             for amem in set(self.amems):
                 amem._relink()
         return index
 
     def activation(self, amem: _AlphaMemory) -> Callable[[WME], None]:
         return self.makers[self.amems.index(amem) + 1]
-
-    def left_activate(self, t: _Token) -> None:
-        self.makers[0](t)
-
-    def forget(self, tok: _Token) -> None:
-        _Node.forget(self, tok)
-        registry = self.registry
-        for wme in tok[1]:
-            record = registry.get(wme)
-            if record is not None:
-                record[1].pop(tok, None)
 
 
 class _ProductionNode(_Node):
