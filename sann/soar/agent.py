@@ -1333,18 +1333,21 @@ class Agent:
         self, goal: Goal, impasse: str, attribute: str, candidates: list[Symbol], slot: Slot
     ) -> None:
         if goal.level >= self.max_goal_depth:
-            # The kernel's guard against runaway subgoaling: say so, make the state, halt.
+            # The kernel's guard against runaway subgoaling: say so, make the state, stop.
+            # It prints "System halted." but only interrupts: a later run goes on (measured).
             self._emit(
                 f"\nGoal stack depth exceeded {self.max_goal_depth} on a {impasse} impasse."
                 "\nSoar appears to be in an infinite loop.  \nContinuing to subgoal may cause"
                 " Soar to \nexceed the program stack of your system.\n"
             )
-            self.request_halt()
+            if self.trace_level >= 1:
+                self._emit_line("System halted.\n")
+            self.request_interrupt()
         ident = self._ids.new("S", level=goal.level + 1)
         sub = self._new_goal(ident, goal)
         sub.impasse, sub.attribute = impasse, attribute
         goal.sub = sub
-        choices = {dec.NO_CHANGE: "none", dec.CONSTRAINT_FAILURE: "constraint-failure"}
+        choices = {dec.NO_CHANGE: "none", dec.CONSTRAINT_FAILURE: "none"}  # measured: not "constraint-failure"
         sub.arch_wmes.append(self._add_arch(ident, "attribute", attribute))
         sub.arch_wmes.append(self._add_arch(ident, "impasse", impasse))
         sub.arch_wmes.append(self._add_arch(ident, "choices", choices.get(impasse, "multiple")))
