@@ -872,29 +872,30 @@ class Agent:
                     bucket.remove(inst)
 
     def _assert_preferences(self, fired: list[Instantiation]) -> None:
-        """Add new preferences to their slots in the kernel's order, then let o-supported
-        rejects remove the older preferences for their values (a rule may remove and
-        re-add the same value in one firing: the new preference survives)."""
+        """Let o-supported rejects remove the older preferences for their values, then add
+        the new preferences to their slots, both in the kernel's order (a rule may remove
+        and re-add the same value in one firing: the new preference survives).  The rejects
+        go first, as in the kernel: their slots are then decided last in the working-memory
+        phase, after the slots that gained preferences (it matters when the removal takes
+        a substate away: what was decided before stays for the phase, measured)."""
         justifications, self._new_justifications = self._new_justifications, []
         insts = [*justifications, *reversed(fired)] if justifications else fired[::-1]
-        o_rejects: list[Preference] = []
         tracing = self.trace_level >= 5
+        o_rejects = [pref for inst in insts for pref in reversed(inst.prefs)
+                     if pref.o_supported and pref.type == REJECT]
+        for pref in o_rejects:
+            if tracing:
+                self._emit("\n+" + trace_preference(pref))
+            self._o_reject(pref)
+            pref.inst = None  # type: ignore[assignment]  # never in a slot: done with
         add = self._add_preference
         for inst in insts:
             for pref in reversed(inst.prefs):
+                if pref.inst is None:  # an o-reject, done with above
+                    continue
                 if tracing:
                     self._emit("\n+" + trace_preference(pref))
-                if pref.o_supported and pref.type == REJECT:
-                    o_rejects.append(pref)
-                    continue
                 add(pref)
-        if o_rejects:
-            # The preferences just added (o-rejects are never in a slot, so they may be
-            # in this set too without effect).
-            fresh = {id(pref) for inst in insts for pref in inst.prefs}
-            for pref in o_rejects:
-                self._o_reject(pref, fresh)
-                pref.inst = None  # type: ignore[assignment]  # never in a slot: done with (see above)
 
     def _slot(self, ident: Identifier, attr: Symbol, create: bool = True) -> Slot | None:
         slots = self._slots.get(ident)
@@ -960,7 +961,7 @@ class Agent:
             slot.changed = True
             (self._changed_context if slot.is_context else self._changed).append(slot)
 
-    def _o_reject(self, reject: Preference, fresh: set[int] = frozenset()) -> None:  # type: ignore[assignment]
+    def _o_reject(self, reject: Preference) -> None:
         """An o-supported reject removes every preference for that value from the slot."""
         slots = self._slots.get(reject.id)
         if slots is None:
@@ -976,7 +977,7 @@ class Agent:
                 pref
                 for bucket in buckets
                 for pref in bucket
-                if pref.value is target and id(pref) not in fresh
+                if pref.value is target
             ]
         elif type(target) is float:  # 1.0 is not the symbol 1
             doomed = [
@@ -985,7 +986,6 @@ class Agent:
                 for pref in bucket
                 if type(pref.value) is float
                 and (pref.value is target or pref.value == target)
-                and id(pref) not in fresh
             ]
         else:
             doomed = [
@@ -994,7 +994,6 @@ class Agent:
                 for pref in bucket
                 if pref.value == target
                 and type(pref.value) is not float
-                and id(pref) not in fresh
             ]
         for pref in doomed:
             if self.trace_level >= 5:
@@ -1347,10 +1346,11 @@ class Agent:
         sub = self._new_goal(ident, goal)
         sub.impasse, sub.attribute = impasse, attribute
         goal.sub = sub
-        choices = {dec.NO_CHANGE: "none", dec.CONSTRAINT_FAILURE: "none"}  # measured: not "constraint-failure"
+        # a constraint failure has ^choices none too (measured)
+        choices = "none" if impasse in (dec.NO_CHANGE, dec.CONSTRAINT_FAILURE) else "multiple"
         sub.arch_wmes.append(self._add_arch(ident, "attribute", attribute))
         sub.arch_wmes.append(self._add_arch(ident, "impasse", impasse))
-        sub.arch_wmes.append(self._add_arch(ident, "choices", choices.get(impasse, "multiple")))
+        sub.arch_wmes.append(self._add_arch(ident, "choices", choices))
         sub.arch_wmes.append(self._add_arch(ident, "quiescence", "t"))
         self._update_items(sub, candidates, slot)
         if self.trace_level >= 1:
@@ -1579,7 +1579,10 @@ class Agent:
         if not all(p.o_supported for p in just.prefs):
             for wme in grounds:
                 self._dependents.setdefault(wme, []).append(just)
-            self._watch_negations(just, visited, inst.goal.level)
+        # A WME that a negated condition of it tested appearing retracts it even when its
+        # results are all o-supported: no preference changes, but it is activity at its
+        # level, like the kernel's (an elaboration cycle that fires nothing; measured).
+        self._watch_negations(just, visited, inst.goal.level)
         if home.level > 1:
             home.insts[just] = None
 
