@@ -41,10 +41,12 @@ from .preferences import ACCEPTABLE, PROHIBIT, REJECT, REQUIRE, Preference, Slot
 from .production import (
     Command,
     Condition,
+    ConjunctiveNegation,
     Const,
     Production,
     Var,
 )
+from .rete import negation_matches
 from .rhs import FUNCTIONS, format_value
 from .trace import print_identifier, trace_preference, trace_wme
 
@@ -367,6 +369,8 @@ class Agent:
         self._phase_timetag = 0
         self._context_changed: Goal | None = None
         self._neg_watch: dict[tuple, list[tuple]] = {}
+        # (justification, conjunctive negation, bindings) whose watched WME came this phase
+        self._ncc_checks: list[tuple] = []
         self._justification_index: dict[tuple, Instantiation] = {}
         self._pending_gds: list[tuple[Goal, list[WME]]] = []
         self._neg_keys: dict[Instantiation, list[tuple]] = {}
@@ -1013,6 +1017,23 @@ class Agent:
             self._in_wm_phase = False
         while self._dead_ids:
             self._slots.pop(self._dead_ids.pop(), None)
+        if self._ncc_checks:
+            self._check_conjunctive_negations()
+
+    def _check_conjunctive_negations(self) -> None:
+        """Retract the justifications whose watched conjunctive negation now matches (a
+        brute-force match over the WMEs with its attributes: this is rare)."""
+        checks, self._ncc_checks = self._ncc_checks, []
+        for just, element, bindings in checks:
+            if just.retracted:
+                continue
+            attrs = {cond.attr_test.value for cond in element.conditions
+                     if isinstance(cond, Condition) and isinstance(cond.attr_test, Const)}
+            wmes = [w for w in self._wm.values() if w.attr in attrs]
+            if len(attrs) < len(element.conditions):  # a variable attribute somewhere
+                wmes = list(self._wm.values())
+            if negation_matches(element, wmes, bindings):
+                self._schedule_retraction(just)
 
     def _working_memory_changes(self) -> None:
         self._phase_timetag = self._timetag
@@ -1625,18 +1646,39 @@ class Agent:
             if match is None:
                 continue
             bindings = match.bindings  # type: ignore[attr-defined]
-            for cond in match.production.conditions:  # type: ignore[attr-defined]
-                if not isinstance(cond, Condition) or not cond.negated:
+            for element in match.production.conditions:  # type: ignore[attr-defined]
+                if isinstance(element, ConjunctiveNegation):
+                    # Watched on each inner condition of a superstate identifier bound
+                    # outside; whether the whole negation now matches is checked at the end
+                    # of the phase (its other WMEs may come later in it).
+                    for cond in element.conditions:
+                        key = self._watch_key(cond, bindings, level)
+                        if key is not None:
+                            self._neg_watch.setdefault(key, []).append(
+                                (just, element, bindings))
+                            keys.append(key)
                     continue
-                if not isinstance(cond.id_test, Var) or not isinstance(cond.attr_test, Const):
+                if not isinstance(element, Condition) or not element.negated:
                     continue
-                ident = bindings.get(cond.id_test.name)
-                if not isinstance(ident, Identifier) or self._level_of(ident) >= level:
-                    continue
-                key = (ident, _vkey(cond.attr_test.value))
-                self._neg_watch.setdefault(key, []).append((just, cond.value_test, bindings))
-                keys.append(key)
+                key = self._watch_key(element, bindings, level)
+                if key is not None:
+                    self._neg_watch.setdefault(key, []).append(
+                        (just, element.value_test, bindings))
+                    keys.append(key)
         self._neg_keys[just] = keys
+
+    def _watch_key(self, cond: object, bindings: dict[str, Symbol],
+                   level: int) -> tuple | None:
+        """``(identifier, attribute)`` of a negated condition on a superstate identifier
+        that the match bound, or None."""
+        if not isinstance(cond, Condition) or not isinstance(cond.id_test, Var):
+            return None
+        if not isinstance(cond.attr_test, Const):
+            return None
+        ident = bindings.get(cond.id_test.name)
+        if not isinstance(ident, Identifier) or self._level_of(ident) >= level:
+            return None
+        return (ident, _vkey(cond.attr_test.value))
 
     def _check_negations(self, wme: WME) -> None:
         watchers = self._neg_watch.get((wme.id, _vkey(wme.attr)))
@@ -1644,6 +1686,9 @@ class Agent:
             return
         for just, test, bindings in list(watchers):
             if just.retracted:
+                continue
+            if isinstance(test, ConjunctiveNegation):
+                self._ncc_checks.append((just, test, bindings))
                 continue
             if isinstance(test, Const) and _vkey(test.value) != _vkey(wme.value):
                 continue

@@ -471,13 +471,14 @@ def brute_force_solutions(
     for full in extend(0, dict(bindings)):
         if not all(_final_tests_hold(cond, chosen[i], full) for i, cond in positives):
             continue
-        if any(_negation_matches(n, wmes, full) for n in negations):
+        if any(negation_matches(n, wmes, full) for n in negations):
             continue
         yield list(chosen), full
 
 
-def _negation_matches(element: ConditionElement, wmes: list[WME],
-                      bindings: dict[str, Symbol]) -> bool:
+def negation_matches(element: ConditionElement, wmes: list[WME],
+                     bindings: dict[str, Symbol]) -> bool:
+    """Whether a negated condition or conjunctive negation finds a match among ``wmes``."""
     if isinstance(element, ConjunctiveNegation):
         inner = element.conditions
     else:
