@@ -81,6 +81,8 @@ class Agent:
         self.trace_level = 0
         self.max_elaborations = 100
         self.max_goal_depth = 100
+        #: ``waitsnc --on``: a state with nothing to do waits instead of a state no-change
+        self.wait_snc = False
         #: RHS errors met while running (each also printed), newest last.
         self.errors: list[str] = []
         self.exploration = dec.Exploration()
@@ -1314,6 +1316,15 @@ class Agent:
                     return True
                 impasse = dec.NO_CHANGE
         attribute = "operator" if slot.wmes or impasse != dec.NO_CHANGE else "state"
+        if attribute == "state" and self.wait_snc and goal.sub is None:
+            if self.trace_level >= 1:  # the kernel shows the waiting state again (measured)
+                indent = " " + "   " * (goal.level - 1)
+                kind = ""
+                if goal.impasse:
+                    no_change = goal.impasse == dec.NO_CHANGE
+                    kind = f"({goal.attribute} {'no-change' if no_change else goal.impasse})"
+                self._emit(f"\n{self._decisions + 1:>6}:{indent}==>S: {goal.id} {kind}")
+            return True
         sub = goal.sub
         if sub is not None and sub.impasse == impasse and sub.attribute == attribute:
             self._update_items(sub, candidates, slot)

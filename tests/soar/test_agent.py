@@ -501,3 +501,34 @@ def test_dropped_working_memory_is_freed_without_the_cycle_collector() -> None:
         gc.enable()
     assert agent.halted is False and other.stats["decisions"] == 5
     assert found == 0
+
+
+def test_wait_snc_makes_a_state_with_nothing_to_do_wait() -> None:
+    """``waitsnc --on`` (measured on the kernel): no state no-change substate; each waiting
+    decision shows the state again, a substate with its own impasse."""
+    agent, out = make(
+        "sp {p (state <s> ^superstate nil -^done) --> (<s> ^operator <o> +) (<o> ^name a)}\n"
+        "sp {a (state <s> ^operator.name a) --> (<s> ^done yes)}"
+    )
+    agent.wait_snc = True
+    agent.trace(1)
+    agent.run(4)
+    assert out.getvalue() == (
+        "\n     1:    O: O1 (a)\n     2: ==>S: S1 \n     3: ==>S: S1 \n     4: ==>S: S1 "
+    )
+    assert agent.stats["decisions"] == 4 and agent.stats["elaboration_cycles"] == 4
+    with pytest.raises(SoarRuntimeError):
+        agent.find_identifier("S2")
+
+
+def test_wait_snc_in_a_substate() -> None:
+    agent, out = make(
+        "sp {p (state <s> ^superstate nil) --> (<s> ^operator <o> +) (<o> ^name a)}\n"
+        "sp {e (state <s> ^superstate.operator.name a) --> (<s> ^mark yes)}"
+    )
+    agent.wait_snc = True
+    agent.trace(1)
+    agent.run(4)
+    assert out.getvalue() == "\n     1:    O: O1 (a)" + "".join(
+        f"\n     {n}:    ==>S: S2 (operator no-change)" for n in (2, 3, 4))
+    assert agent.stats["elaboration_cycles"] == 2 and values(agent, "S2", "mark") == ["yes"]
