@@ -166,13 +166,60 @@ def _max(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
 
 
 def _round_off(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    """The kernel's ``round-off`` (measured in soar_sml 9.6): the nearest multiple of the
+    precision, ties away from zero, computed in one of three ways by the precision's type.
+
+    - integer precision: the value is first truncated to an integer, the result is an
+      integer (``(round-off 3.7 1)`` is 3, ``(round-off 37 10)`` is 40);
+    - float precision below 1 in magnitude: the kernel works in tenths, truncating both the
+      value and the precision to tenths (``(round-off 1.25 0.25)`` is 1.2);
+    - any other float precision: in floating point (``(round-off 2.5 1.0)`` is 3.0).
+
+    A float precision below 0.1 truncates to zero tenths and the kernel returns NaN; we
+    round in floating point instead (``(round-off 3.14159 0.01)`` is 3.14)."""
     if len(args) != 2:
         raise SoarRuntimeError("(round-off): needs a number and a precision")
     value, step = _numbers("round-off", args)
     if step == 0:
         raise SoarRuntimeError("(round-off): precision must not be zero")
-    result = int(value / step) * step
-    return float(result) if isinstance(value, float) or isinstance(step, float) else int(result)
+    if isinstance(step, int):
+        return _round_int(int(value), step)
+    if abs(step) < 1 and int(step * 10) != 0:
+        return _round_tenths(int(value * 10), int(step * 10))
+    return _round_float(float(value), step)
+
+
+def _round_int(value: int, step: int) -> int:
+    """C's ``(value +- step/2) / step * step`` with division truncating toward zero."""
+    half = _c_div(step, 2)
+    return _c_div(value + half if value >= 0 else value - half, step) * step
+
+
+def _c_div(a: int, b: int) -> int:
+    quotient = abs(a) // abs(b)
+    return quotient if (a >= 0) == (b >= 0) else -quotient
+
+
+def _round_tenths(value: int, step: int) -> float:
+    """`_round_int` in tenths, the half-step an integer, the quotient a C double."""
+    half = _c_div(step, 2)
+    return _scaled(value + half if value >= 0 else value - half, step) / 10
+
+
+def _round_float(value: float, step: float) -> float:
+    """The float form of `_round_int`."""
+    return _scaled(value + step / 2 if value >= 0 else value - step / 2, step)
+
+
+def _scaled(shifted: float, step: float) -> float:
+    """``trunc(shifted / step) * step``. A zero result is ``-0.0`` only when the quotient
+    is a negative zero and the step is positive: the kernel prints ``-0.000000`` for
+    ``(round-off -1.25 3.0)`` but ``0.000000`` for ``(round-off 0.3 -0.5)`` and
+    ``(round-off -1.29 -1.5)`` (measured), which no plain product gives."""
+    quotient = math.modf(shifted / step)[1]
+    if quotient:
+        return quotient * step
+    return -0.0 if step > 0 and math.copysign(1.0, quotient) < 0 else 0.0
 
 
 def _concat(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:

@@ -60,6 +60,7 @@ def call(name: str, *args):
         ("int", ("12",), 12),
         ("float", (3,), 3.0),
         ("round-off", (3.456, 0.1), 3.4),
+        ("round-off", (37, 10), 40),
         ("concat", ("a", 1, 2.5, "x y"), "a12.500000x y"),
         ("ifeq", ("a", "a", "yes", "no"), "yes"),
         ("ifeq", (1, 1.0, "yes", "no"), "no"),
@@ -118,3 +119,31 @@ def test_format_value() -> None:
     assert format_value(0.1) == "0.100000"
     assert format_value(1e-7) == "0.000000"
     assert format_value(Identifier("S", 1)) == "S1"
+
+
+# (value, precision) -> what the kernel (soar_sml 9.6) writes for (round-off value precision).
+ROUND_OFF_KERNEL = [
+    (37, 10, "40"), (35, 10, "40"), (-35, 10, "-40"), (-45, 10, "-50"), (7, 2, "8"),
+    (-7, 2, "-8"), (7, -2, "6"), (7, -10, "0"), (37, 3, "36"), (38, 3, "39"),
+    (3.7, 1, "3"), (2.5, 1, "2"), (-3.7, 1, "-3"), (-0.5, 1, "0"), (37.0, 10, "40"),
+    (3.14159, 0.1, "3.100000"), (3.14159, 0.5, "3.000000"), (1.25, 0.5, "1.000000"),
+    (1.25, 0.25, "1.200000"), (7.5, 0.25, "7.600000"), (7, 0.5, "7.000000"),
+    (7, -0.5, "6.500000"), (1.0, -0.25, "0.800000"), (5, 0.9, "5.400000"),
+    (2.5, 1.0, "3.000000"), (3.7, 1.0, "4.000000"), (37, 10.0, "40.000000"),
+    (1.75, 3.0, "3.000000"), (5, -1.5, "3.000000"), (-5, -1.5, "-3.000000"),
+    (-1.25, 3.0, "-0.000000"), (0.3, -0.5, "0.000000"), (-1.29, -1.5, "0.000000"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("value", "precision", "printed"), ROUND_OFF_KERNEL)
+def test_round_off_matches_the_kernel(value, precision, printed: str) -> None:
+    result = call("round-off", value, precision)
+    assert type(result) is (int if isinstance(precision, int) else float)
+    assert format_value(result) == printed
+
+
+def test_round_off_below_a_tenth_rounds_where_the_kernel_returns_nan() -> None:
+    assert format_value(call("round-off", 3.14159, 0.01)) == "3.140000"
+    assert format_value(call("round-off", -1.2345, 0.05)) == "-1.250000"
+    with pytest.raises(SoarRuntimeError, match="zero"):
+        call("round-off", 5, 0)
