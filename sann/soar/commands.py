@@ -7,13 +7,16 @@ shell commands or Python.
 
 from __future__ import annotations
 
+import functools
+import itertools
+import math
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .decide import POLICIES
 from .errors import SoarRuntimeError
-from .production import Command
+from .production import Command, SourceLocation
 
 if TYPE_CHECKING:
     from .agent import Agent
@@ -23,12 +26,17 @@ Handler = Callable[["Agent", tuple[str, ...], Path], None]
 
 def execute(agent: Agent, command: Command, base: Path) -> None:
     """Run one command; ``base`` is the directory of the file that holds it."""
+    alias = _aliases(agent).get(command.name)
+    if alias is not None:
+        command = Command(alias[0], alias[1:] + command.args, command.location)
     handler = HANDLERS.get(command.name)
     where = _where(command)
     if command.name in ("exec", "cmd"):
         raise SoarRuntimeError(f"{where}{command.name}: refused, a rule file never runs commands")
     if handler is None:
         raise SoarRuntimeError(f"{where}unknown or unsupported command: {command.name}")
+    if handler is _gp:
+        handler = functools.partial(_gp, location=command.location)
     try:
         handler(agent, command.args, base)
     except SoarRuntimeError as error:
@@ -113,6 +121,9 @@ _TRACE_IGNORED = (
 )  # fmt: skip
 
 
+_TRACE_IGNORED_VALUES = ("0", "1", "2", "on", "off", "remove", "print", "noprint", "fullprint")
+
+
 def _watch(agent: Agent, args: tuple[str, ...], base: Path) -> None:
     if not args:
         return
@@ -139,7 +150,7 @@ def _watch(agent: Agent, args: tuple[str, ...], base: Path) -> None:
                 else min(agent.trace_level, flag_level - 1)
             )
         elif item in _TRACE_IGNORED:
-            if items and items[0] in ("0", "1", "2", "on", "off", "remove"):
+            if items and items[0] in _TRACE_IGNORED_VALUES:
                 items.pop(0)
         else:
             raise SoarRuntimeError(f"unknown option {item}")
@@ -252,16 +263,326 @@ def _output(agent: Agent, args: tuple[str, ...], base: Path) -> None:
         agent.warnings = rest[0] in ("on", "1", "yes")
 
 
+_EXCISE_GROUPS = {
+    "--all": "all", "-a": "all", "--user": "user", "-u": "user", "--default": "default",
+    "-d": "default", "--chunks": "none", "-c": "none", "--rl": "none", "-r": "none",
+    "--templates": "none", "-t": "none",
+}  # fmt: skip
+
+
 def _excise(agent: Agent, args: tuple[str, ...], base: Path) -> None:
+    """``excise name...`` or a group: ``--all``, ``--user`` (all but ``:default`` rules),
+    ``--default``; ``--chunks``, ``--rl`` and ``--templates`` excise nothing here (this
+    engine makes no chunks and has no RL or template rules) and succeed, as in the kernel
+    when there are none."""
     for name in args:
-        if name in ("--all", "-a", "--user", "-u"):
-            agent.excise_all()
-        else:
+        group = _EXCISE_GROUPS.get(name)
+        if group is None and name.startswith("-"):
+            raise SoarRuntimeError(f"unknown option {name}")
+        if group is None:
             agent.excise(name)
+        elif group == "all":
+            agent.excise_all()
+        elif group != "none":
+            for rule, info in list(agent._productions.items()):
+                if ("default" in info.production.flags) == (group == "default"):
+                    agent.excise(rule)
 
 
 def _init_soar(agent: Agent, args: tuple[str, ...], base: Path) -> None:
     agent.init()
+
+
+def _aliases(agent: Agent) -> dict[str, tuple[str, ...]]:
+    return agent.__dict__.setdefault("_aliases", {})
+
+
+def _alias(agent: Agent, args: tuple[str, ...], base: Path) -> None:
+    """``alias name command [args]`` defines a command word; ``alias -r name`` removes it;
+    ``alias`` or ``alias name`` alone shows nothing here (the kernel lists its aliases)."""
+    if args[:1] in (("-r",), ("--remove",)):
+        for name in args[1:]:
+            _aliases(agent).pop(name, None)
+        return
+    if len(args) >= 2:
+        if args[1] not in HANDLERS and args[1] not in _aliases(agent):
+            raise SoarRuntimeError(f"cannot alias {args[0]} to unknown command {args[1]}")
+        _aliases(agent)[args[0]] = args[1:]
+
+
+_MEMORIES = {"rl": "reinforcement learning (RL)", "epmem": "episodic memory (epmem)",
+             "smem": "semantic memory (smem)"}  # fmt: skip
+
+
+def _memory(name: str) -> Handler:
+    """``rl``, ``epmem`` and ``smem``: this engine has none of them, so only the forms that
+    leave them off are accepted; their other parameters do nothing while they are off."""
+    feature = _MEMORIES[name]
+
+    def handler(agent: Agent, args: tuple[str, ...], base: Path) -> None:
+        items = list(args)
+        while items:
+            item = items.pop(0)
+            if item in ("--enable", "-e", "--on"):
+                raise SoarRuntimeError(f"{feature} is not implemented by this engine")
+            if item in ("--disable", "-d", "--off"):
+                continue
+            if item not in ("--set", "-s") or len(items) < 2:
+                raise SoarRuntimeError(
+                    f"unsupported option {item}: only '--set <parameter> <value>' and "
+                    f"'--disable' are accepted ({feature} is not implemented by this engine)"
+                )
+            param, value = items.pop(0), items.pop(0)
+            if param in ("learning", "enabled") and value not in ("off", "0", "false"):
+                raise SoarRuntimeError(
+                    f"{feature} is not implemented by this engine; only "
+                    f"'{param} off' is accepted"
+                )
+
+    return handler
+
+
+def _on_off(args: tuple[str, ...], what: str) -> bool | None:
+    """``--on``/``-e``/``on`` -> True, ``--off``/``-d``/``off`` -> False, nothing -> None."""
+    if not args:
+        return None
+    if len(args) == 1 and args[0] in ("--on", "-e", "--enable", "on", "1"):
+        return True
+    if len(args) == 1 and args[0] in ("--off", "-d", "--disable", "off", "0"):
+        return False
+    raise SoarRuntimeError(f"{what} expects on or off, got {' '.join(args)}")
+
+
+def _timers(agent: Agent, args: tuple[str, ...], base: Path) -> None:
+    """Timers only measure time; turning them on or off changes nothing else."""
+    _on_off(args, "timers")
+
+
+def _warnings(agent: Agent, args: tuple[str, ...], base: Path) -> None:
+    state = _on_off(args, "warnings")
+    if state is None:
+        agent._emit(f"warnings is {'on' if agent.warnings else 'off'}\n")
+    else:
+        agent.warnings = state
+
+
+def _wait_snc(agent: Agent, args: tuple[str, ...], base: Path) -> None:
+    """``waitsnc``: with it on, a state that does not change waits instead of impassing."""
+    state = _on_off(args, "wait-snc")
+    if state is None:
+        agent._emit(f"wait-snc is {'on' if getattr(agent, 'wait_snc', False) else 'off'}\n")
+    else:
+        agent.wait_snc = state
+
+
+def _max_gp(agent: Agent, args: tuple[str, ...], base: Path) -> None:
+    if not args:
+        agent._emit(f"max-gp is {_gp_limit(agent)}\n")
+        return
+    value = _int(args[0])
+    if len(args) > 1 or value < 1:
+        raise SoarRuntimeError("max-gp expects one positive integer")
+    agent.__dict__["_max_gp"] = value
+
+
+def _gp_limit(agent: Agent) -> int:
+    return agent.__dict__.get("_max_gp", GP_LIMIT)
+
+
+def _max_goal_depth(agent: Agent, args: tuple[str, ...], base: Path) -> None:
+    if not args:
+        agent._emit(f"max-goal-depth is {agent.max_goal_depth}\n")
+        return
+    value = _int(args[0])
+    if len(args) > 1 or value < 1:
+        raise SoarRuntimeError("max-goal-depth expects one positive integer")
+    agent.max_goal_depth = value
+
+
+_PHASES = ("input", "proposal", "decision", "apply", "output")
+
+
+def _stop_phase(agent: Agent, args: tuple[str, ...], base: Path) -> None:
+    """``soar stop-phase``: where ``run N`` stops. Our runs stop before the apply phase, the
+    kernel's default; another phase would change what ``run N`` means, so it is refused."""
+    phase = [a.lstrip("-") for a in args if a not in ("--before", "-B")]
+    if not phase or phase in (["apply"], ["a"]):
+        return
+    if len(phase) == 1 and phase[0] in _PHASES:
+        raise SoarRuntimeError(
+            f"stop-phase {phase[0]} is not supported: this engine's run stops before the "
+            "apply phase only (the kernel's default)"
+        )
+    raise SoarRuntimeError(f"unknown phase {' '.join(args)}")
+
+
+def _soar(agent: Agent, args: tuple[str, ...], base: Path) -> None:
+    """The umbrella ``soar`` command of Soar 9.6; with no argument it prints nothing here."""
+    if not args:
+        return
+    handler = _SOAR_SUBCOMMANDS.get(args[0])
+    if handler is None:
+        raise SoarRuntimeError(f"unsupported sub-command {args[0]}")
+    handler(agent, args[1:], base)
+
+
+def _run(agent: Agent, args: tuple[str, ...], base: Path) -> None:
+    """``run``, ``run N``, ``run -d N``: run as the kernel does when a file says so (the
+    kernel runs an agent file's ``run`` at source time). Other units are refused."""
+    counts = [a for a in args if not a.startswith("-")]
+    options = [a for a in args if a.startswith("-")]
+    if any(o not in ("-d", "--decision") for o in options) or len(counts) > 1:
+        raise SoarRuntimeError(
+            f"unsupported form 'run {' '.join(args)}': use run, run N or run -d N (decisions)"
+        )
+    agent.run(_int(counts[0]) if counts else None)
+
+
+def _stats(agent: Agent, args: tuple[str, ...], base: Path) -> None:
+    """The counting lines of the kernel's ``stats`` (the timing lines are meaningless)."""
+    if args:
+        raise SoarRuntimeError(f"unsupported option {args[0]}")
+    st = agent.stats
+    agent._emit(
+        f"{st['decisions']} decisions\n{st['elaboration_cycles']} elaboration cycles\n"
+        f"{st['production_firings']} production firings\n"
+        f"{st['wme_changes']} wme changes ({st['wme_additions']} additions, "
+        f"{st['wme_removals']} removals)\nWM size: {st['wm_size']} current\n"
+    )
+
+
+def _print(agent: Agent, args: tuple[str, ...], base: Path) -> None:
+    """``print`` / ``print --all`` (rule names, newest first, as the kernel), ``print rule``
+    and ``print [-d N] id``."""
+    from .printer import format_production
+
+    items, depth, names = list(args), 1, []
+    while items:
+        item = items.pop(0)
+        if item in ("-d", "--depth"):
+            if not items:
+                raise SoarRuntimeError(f"{item} needs a number")
+            depth = _int(items.pop(0))
+        elif item in ("-a", "--all"):
+            continue
+        elif item.startswith("-"):
+            raise SoarRuntimeError(f"unsupported option {item}")
+        else:
+            names.append(item)
+    if not names:
+        agent._emit("".join(f"{name} \n" for name in reversed(agent.productions)))
+    for name in names:
+        info = agent._productions.get(name)
+        if info is not None:
+            agent._emit(format_production(info.production) + "\n")
+        else:
+            agent._emit(agent.print(name, depth) + "\n")
+
+
+#: The kernel's default for ``soar max-gp``: the most productions one ``gp`` may make.
+GP_LIMIT = 20000
+
+
+def _gp(
+    agent: Agent, args: tuple[str, ...], base: Path, location: SourceLocation | None = None
+) -> None:
+    """``gp {name conditions --> actions}`` with ``[a b c]`` value lists: one production per
+    combination, named ``name*1``, ``name*2``... with the first list varying fastest, as the
+    kernel numbers them. Each is parsed as ``sp {...}`` at the gp's own line and column, so
+    an error in one points into the file."""
+    if len(args) != 1:
+        raise SoarRuntimeError("expects one {braced} production")
+    pieces = _gp_pieces(args[0])
+    lists = [piece for piece in pieces if isinstance(piece, list)]
+    total = math.prod(len(values) for values in lists)
+    if total > _gp_limit(agent):
+        raise SoarRuntimeError(
+            f"gp-max of {_gp_limit(agent)} exceeded: this gp produces {total} productions "
+            "('soar max-gp N' sets a higher limit)"
+        )
+    body = "".join(p for p in pieces if isinstance(p, str))
+    name = body.split(None, 1)[0] if body.strip() else ""
+    if not name:
+        raise SoarRuntimeError("expects a production name")
+    prefix = _gp_prefix(location)
+    file = location.file if location is not None else "<string>"
+    for number, combination in enumerate(_combinations(lists), 1):
+        values = iter(combination)
+        text = "".join(p if isinstance(p, str) else next(values) for p in pieces)
+        text = text.replace(name, f"{name}*{number}", 1)
+        agent.load(f"{prefix}sp {{{text}}}", file)
+
+
+def _gp_prefix(location: SourceLocation | None) -> str:
+    """Blank text that puts the generated ``sp {`` where the ``gp {`` was written."""
+    if location is None:
+        return ""
+    return "\n" * (location.line - 1) + " " * (location.column - 1)
+
+
+def _combinations(lists: list[list[str]]) -> list[tuple[str, ...]]:
+    """Every choice of one value per list, the first list varying fastest."""
+    combos = itertools.product(*reversed(lists))
+    return [tuple(reversed(combo)) for combo in combos]
+
+
+def _gp_pieces(text: str) -> list[str | list[str]]:
+    """Split a gp body into literal text and ``[...]`` value lists; ``|strings|`` and
+    ``#`` comments are literal, brackets in them do not count."""
+    pieces: list[str | list[str]] = []
+    literal = 0
+    i = 0
+    while i < len(text):
+        char = text[i]
+        if char in "|#":
+            i = _skip_literal(text, i)
+            continue
+        if char == "]":
+            raise SoarRuntimeError("gp syntax error: ']' without '['")
+        if char == "[":
+            pieces.append(text[literal:i])
+            end, values = _value_list(text, i + 1)
+            pieces.append(values)
+            literal = i = end
+            continue
+        i += 1
+    pieces.append(text[literal:])
+    return pieces
+
+
+def _skip_literal(text: str, start: int) -> int:
+    """Index just after the ``|string|`` or ``# comment`` that starts at ``start``."""
+    if text[start] == "#":
+        end = text.find("\n", start)
+        return len(text) if end < 0 else end
+    i = start + 1
+    while i < len(text) and text[i] != "|":
+        i += 2 if text[i] == "\\" else 1
+    return i + 1
+
+
+def _value_list(text: str, start: int) -> tuple[int, list[str]]:
+    """The values of a ``[...]`` list whose first value starts at ``start``, and the index
+    after its ``]``."""
+    values: list[str] = []
+    i = start
+    while i < len(text):
+        char = text[i]
+        if char == "]":
+            if not values:
+                raise SoarRuntimeError("gp can't have empty value collections")
+            return i + 1, values
+        if char == "[":
+            raise SoarRuntimeError("gp syntax error: nested '[' in a value list")
+        if char.isspace():
+            i += 1
+            continue
+        end = _skip_literal(text, i) if char == "|" else i
+        while end < len(text) and not text[end].isspace() and text[end] not in "[]":
+            end += 1
+        values.append(text[i:end])
+        i = end
+    raise SoarRuntimeError("gp syntax error, unmatched values bracket")
 
 
 HANDLERS: dict[str, Handler] = {
@@ -282,4 +603,32 @@ HANDLERS: dict[str, Handler] = {
     "output": _output,
     "excise": _excise,
     "init-soar": _init_soar,
+    "init": _init_soar,
+    "alias": _alias,
+    "rl": _memory("rl"),
+    "epmem": _memory("epmem"),
+    "smem": _memory("smem"),
+    "timers": _timers,
+    "warnings": _warnings,
+    "waitsnc": _wait_snc,
+    "max-gp": _max_gp,
+    "gp-max": _max_gp,
+    "max-goal-depth": _max_goal_depth,
+    "set-stop-phase": _stop_phase,
+    "soar": _soar,
+    "run": _run,
+    "stats": _stats,
+    "print": _print,
+    "p": _print,
+    "gp": _gp,
+}
+
+_SOAR_SUBCOMMANDS: dict[str, Handler] = {
+    "init": _init_soar,
+    "max-elaborations": _max_elaborations,
+    "max-goal-depth": _max_goal_depth,
+    "max-gp": _max_gp,
+    "wait-snc": _wait_snc,
+    "stop-phase": _stop_phase,
+    "timers": _timers,
 }

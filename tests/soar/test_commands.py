@@ -6,7 +6,7 @@ import io
 
 import pytest
 
-from sann.soar import Agent, SoarRuntimeError
+from sann.soar import Agent, SoarError, SoarRuntimeError
 
 
 def agent_with(text: str) -> tuple[Agent, io.StringIO]:
@@ -97,3 +97,146 @@ def test_excise_and_init_soar_commands() -> None:
     assert agent.productions == []
     agent.load("init-soar")
     assert agent.stats["wm_size"] == 13
+
+
+# Forms the kernel (soar_sml 9.6) accepts that leave this engine's behaviour unchanged.
+@pytest.mark.parametrize(
+    "text",
+    [
+        "rl --set learning off", "rl -s learning off", "rl -s learning-rate 0.1", "rl",
+        "epmem --set learning off", "smem --disable", "smem -d", "smem --set learning off",
+        "timers --off", "timers --on", "timers -d", "soar timers on", "soar timers off",
+        "watch --learning print", "trace --learning fullprint", "excise --chunks",
+        "excise -c", "soar stop-phase apply", "soar", "alias", "max-gp 5", "soar max-gp 9",
+    ],
+)  # fmt: skip
+def test_accepted_no_op_forms(text: str) -> None:
+    agent, out = agent_with(text)
+    assert out.getvalue() == ""
+    assert agent.trace_level == 0
+
+
+@pytest.mark.parametrize(
+    ("text", "feature"),
+    [
+        ("rl --set learning on", "reinforcement learning"), ("rl -s learning on", "RL"),
+        ("epmem --set learning on", "episodic memory"), ("smem --enable", "semantic memory"),
+        ("smem -e", "semantic memory"), ("smem --set learning on", "semantic memory"),
+        ("smem --add {(<x> ^a b)}", "smem"), ("soar stop-phase output", "apply phase"),
+        ("run -e 3", "run"), ("soar version", "sub-command"), ("timers maybe", "on or off"),
+    ],
+)  # fmt: skip
+def test_forms_needing_missing_features_are_refused_clearly(text: str, feature: str) -> None:
+    with pytest.raises(SoarRuntimeError, match=feature):
+        agent_with(text)
+
+
+def test_settings_through_soar_and_aliases() -> None:
+    agent, out = agent_with(
+        "soar max-elaborations 7\nwarnings --off\nmax-goal-depth 9\nalias me max-elaborations\n"
+        "me 8\nalias -r me\n"
+    )
+    assert agent.max_elaborations == 8
+    assert agent.warnings is False and agent.max_goal_depth == 9
+    agent.load("warnings --on\nwarnings")
+    assert agent.warnings is True
+    assert out.getvalue() == "warnings is on\n"
+    with pytest.raises(SoarRuntimeError, match="unknown or unsupported command: me"):
+        agent.load("me 5")
+
+
+def test_wait_snc_sets_the_agent_flag() -> None:
+    agent, out = agent_with("waitsnc --on")
+    assert agent.wait_snc is True
+    agent.load("soar wait-snc off\nwaitsnc")
+    assert agent.wait_snc is False
+    assert out.getvalue() == "wait-snc is off\n"
+    agent.load("soar wait-snc on\nwaitsnc -d\nwaitsnc -e")
+    assert agent.wait_snc is True
+
+
+COUNTER = (
+    "sp {propose (state <s> ^superstate nil -^n) --> (<s> ^operator <o> +) (<o> ^name go)}\n"
+    "sp {apply (state <s> ^operator.name go) --> (<s> ^n 1) (write |applied|)}\n"
+)
+
+
+def test_init_and_soar_init_reinitialise() -> None:
+    agent, _ = agent_with(COUNTER + "run 1\n")
+    assert agent.stats["decisions"] == 1
+    agent.load("init")
+    assert agent.stats["decisions"] == 0 and agent.stats["wm_size"] == 13
+    agent.run(2)
+    agent.load("soar init")
+    assert agent.stats["decisions"] == 0 and agent.productions == ["propose", "apply"]
+
+
+def test_run_in_a_file_runs_as_the_kernel_does() -> None:
+    # The kernel runs `run N` at source time: `source` of this text makes 3 decisions.
+    agent, out = agent_with(COUNTER + "run 3\n")
+    assert agent.stats["decisions"] == 3
+    assert out.getvalue() == "applied"
+    agent.load("run -d 2")
+    assert agent.stats["decisions"] == 5
+
+
+def test_print_and_stats_at_source_time() -> None:
+    agent, out = agent_with(COUNTER + "print --all\nprint apply\nprint -d 1 s1\nstats\n")
+    text = out.getvalue()
+    assert text.startswith("apply \npropose \nsp {apply\n")
+    assert "(S1 ^epmem E1 ^io I1 ^reward-link R1" in text and "^superstate nil" in text
+    assert "0 decisions\n" in text and "WM size: 13 current" in text
+
+
+def test_excise_groups() -> None:
+    rules = (
+        "sp {user (state <s> ^superstate nil) --> (<s> ^a 1)}\n"
+        "sp {lib :default (state <s> ^superstate nil) --> (<s> ^b 1)}\n"
+    )
+    agent, _ = agent_with(rules + "excise --user")
+    assert agent.productions == ["lib"]
+    agent, _ = agent_with(rules + "excise -d")
+    assert agent.productions == ["user"]
+    agent, _ = agent_with(rules + "excise --chunks\nexcise -a")
+    assert agent.productions == []
+    with pytest.raises(SoarRuntimeError, match="unknown option"):
+        agent_with("excise --bogus")
+
+
+def test_gp_generates_every_combination_with_the_kernels_names() -> None:
+    agent, out = agent_with(
+        "gp {gen (state <s> ^foo [a b c] ^baz [1 2]) --> (<s> ^bar [x |y z|])}\n"
+        "print gen*1\nprint gen*11\n"
+    )
+    # The kernel numbers the combinations with the first list varying fastest.
+    assert agent.productions == [f"gen*{n}" for n in range(1, 13)]
+    assert out.getvalue() == (
+        "sp {gen*1\n    (state <s> ^foo a ^baz 1)\n    -->\n    (<s> ^bar x)\n}\n"
+        "sp {gen*11\n    (state <s> ^foo b ^baz 2)\n    -->\n    (<s> ^bar |y z|)\n}\n"
+    )
+    agent, _ = agent_with("gp {one (state <s> ^[a b] 1 ^c |[x]|) --> (<s> ^d 1)} # [no]\n")
+    assert agent.productions == ["one*1", "one*2"]
+    agent, _ = agent_with("gp {single (state <s> ^foo a) --> (<s> ^bar b)}")
+    assert agent.productions == ["single*1"]
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("gp {e (state <s> ^foo []) --> (<s> ^b 1)}", "empty value collections"),
+        ("gp {e (state <s> ^foo [a b) --> (<s> ^b 1)}", "unmatched values bracket"),
+        ("gp {e (state <s> ^foo a]) --> (<s> ^b 1)}", "without"),
+        ("gp {e (state <s> ^foo [a [b]]) --> (<s> ^b 1)}", "nested"),
+        ("max-gp 3\ngp {e (state <s> ^f [a b] ^g [c d]) --> (<s> ^b 1)}", "gp-max of 3"),
+    ],
+)
+def test_gp_errors_say_where(text: str, message: str) -> None:
+    with pytest.raises(SoarRuntimeError, match=message) as info:
+        agent_with("\n" + text)
+    assert "<string>:2" in str(info.value) or "<string>:3" in str(info.value)
+
+
+def test_gp_syntax_error_points_into_the_file() -> None:
+    with pytest.raises(SoarError) as info:
+        agent_with("\n\ngp {bad (state <s> ^foo [a b] --> (<s> ^bar 1)}")
+    assert ":3:" in str(info.value) and "bad*1" in str(info.value)
