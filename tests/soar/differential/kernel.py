@@ -437,6 +437,10 @@ def run_ours(
     out = io.StringIO()
     agent = Agent(out=out)
     agent.source(str(path))
+    # The kernel half drops what sourcing printed (``source`` returns the text of ``echo``,
+    # ``print`` or ``stats`` and the trace of a ``run`` goes to the discarded log); so do we.
+    out.seek(0)
+    out.truncate()
     agent.trace(0)
     _add_our_inputs(agent, spec.inputs if inputs is None else inputs)
     agent.run(decisions=limit)

@@ -235,3 +235,17 @@ def test_bad_agent_headers_are_refused(tmp_path: Path, header: str) -> None:
     agent.write_text(header + "\n")
     with pytest.raises(ValueError, match="bad.soar"):
         read_spec(agent)
+
+
+def test_source_time_output_is_dropped_on_both_sides(tmp_path: Path) -> None:
+    """``echo``/``print`` while sourcing go to the kernel's ``source`` result, which the
+    harness drops; our half must drop them too, or any agent that echoes would differ."""
+    pytest.importorskip("sann.soar.agent", reason="our engine (sann/soar/agent.py) has not landed")
+    agent = tmp_path / "echo.soar"
+    agent.write_text(
+        "echo loading the agent\nsp {go\n   (state <s> ^superstate nil)\n-->\n"
+        "   (<s> ^operator <o> +)\n   (<o> ^name go)}\nprint go\n"
+        "sp {stop\n   (state <s> ^operator.name go)\n-->\n   (write |ran|)\n   (halt)}\n"
+    )
+    theirs, ours = run_kernel(agent), run_ours(agent)
+    assert theirs.output == ours.output == "ran"
