@@ -90,6 +90,9 @@ class Agent:
         self._productions: dict[str, ProductionInfo] = {}
         self._load_count = 0
         self._dir_stack: list[Path] = []
+        self._pushd: list[Path] = []  # directories pushd put on top of the sourcing file's
+        self._aliases: dict[str, tuple[str, ...]] = {}  # alias -> the command words
+        self.max_gp = 20000  # most productions one gp may make (the kernel's default)
         self.multi_attributes: dict[str, int] = {}
         self.warnings = True
         self._gensym_counter = 0

@@ -61,7 +61,7 @@ def _source(agent: Agent, args: tuple[str, ...], base: Path) -> None:
 
 
 def _current_dir(agent: Agent, base: Path) -> Path:
-    pushed = getattr(agent, "_pushd", None)
+    pushed = agent._pushd
     if pushed:
         return pushed[-1]
     return base
@@ -75,13 +75,12 @@ def _pushd(agent: Agent, args: tuple[str, ...], base: Path) -> None:
         target = _current_dir(agent, base) / target
     if not target.is_dir():
         raise SoarRuntimeError(f"no such directory: {args[0]}")
-    stack = agent.__dict__.setdefault("_pushd", [])
-    stack.append(target.resolve())
+    agent._pushd.append(target.resolve())
     agent._dir_stack.append(target.resolve())
 
 
 def _popd(agent: Agent, args: tuple[str, ...], base: Path) -> None:
-    stack = agent.__dict__.get("_pushd")
+    stack = agent._pushd
     if not stack:
         raise SoarRuntimeError("directory stack is empty")
     stack.pop()
@@ -294,7 +293,7 @@ def _init_soar(agent: Agent, args: tuple[str, ...], base: Path) -> None:
 
 
 def _aliases(agent: Agent) -> dict[str, tuple[str, ...]]:
-    return agent.__dict__.setdefault("_aliases", {})
+    return agent._aliases
 
 
 def _alias(agent: Agent, args: tuple[str, ...], base: Path) -> None:
@@ -370,7 +369,7 @@ def _wait_snc(agent: Agent, args: tuple[str, ...], base: Path) -> None:
     """``waitsnc``: with it on, a state that does not change waits instead of impassing."""
     state = _on_off(args, "wait-snc")
     if state is None:
-        agent._emit(f"wait-snc is {'on' if getattr(agent, 'wait_snc', False) else 'off'}\n")
+        agent._emit(f"wait-snc is {'on' if agent.wait_snc else 'off'}\n")
     else:
         agent.wait_snc = state
 
@@ -382,11 +381,11 @@ def _max_gp(agent: Agent, args: tuple[str, ...], base: Path) -> None:
     value = _int(args[0])
     if len(args) > 1 or value < 1:
         raise SoarRuntimeError("max-gp expects one positive integer")
-    agent.__dict__["_max_gp"] = value
+    agent.max_gp = value
 
 
 def _gp_limit(agent: Agent) -> int:
-    return agent.__dict__.get("_max_gp", GP_LIMIT)
+    return agent.max_gp
 
 
 def _max_goal_depth(agent: Agent, args: tuple[str, ...], base: Path) -> None:
@@ -477,10 +476,6 @@ def _print(agent: Agent, args: tuple[str, ...], base: Path) -> None:
             agent._emit(format_production(info.production) + "\n")
         else:
             agent._emit(agent.print(name, depth) + "\n")
-
-
-#: The kernel's default for ``soar max-gp``: the most productions one ``gp`` may make.
-GP_LIMIT = 20000
 
 
 def _gp(

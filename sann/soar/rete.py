@@ -1132,48 +1132,57 @@ class _PartnerNode(_Node):
             self.ncc.release(owner, result)
 
 
-def _bucket_lines(k: int, pad: str, vals: str, pos: int, seeded: bool) -> list[str]:
-    """Generated code: ``b<k>`` = the WMEs of condition ``k`` hashed on ``vals[pos]`` (its
-    alpha memory ``W<k>`` when ``pos`` < 0), or just the seed WME when it fits."""
-    if seeded:  # same_symbol(vals[pos], the seed's field), inline
-        test = (f"(x := {vals}[{pos}]).__class__ is (y := G{k}(seed)).__class__ and x == y"
-                if pos >= 0 else "True")
+def _bucket_lines(k: int, pad: str, key: str | None, seeded: bool) -> list[str]:
+    """Generated code: ``b<k>`` = the WMEs of condition ``k`` hashed on the value ``key``
+    (an expression; its alpha memory ``W<k>`` when None), or just the seed WME when it
+    fits."""
+    if seeded:  # same_symbol(key, the seed's field), inline
+        test = (f"(x := {key}).__class__ is (y := G{k}(seed)).__class__ and x == y"
+                if key is not None else "True")
         return [f"{pad}b{k} = (seed,) if {test} else ()"]
-    if pos < 0:
+    if key is None:
         return [f"{pad}b{k} = W{k}"]
-    return [f"{pad}key = {vals}[{pos}]", f"{pad}if key.__class__ is float: key = (FLOAT, key)",
+    return [f"{pad}key = {key}", f"{pad}if key.__class__ is float: key = (FLOAT, key)",
             f"{pad}b{k} = I{k}.get(key, ())"]
 
 
-def _compile_query(levels: list[tuple], seed: int) -> Callable[[tuple, WME | None], tuple | None]:
+def _compile_query(levels: list[tuple], seed: int,
+                   width: int) -> Callable[[tuple, WME | None], tuple | None]:
     """A search for one match of a query NCC's inner conditions as nested loops, one per
     condition (a negated one as ``for ... break / else``), with condition ``seed`` (if
     any) matching only the WME passed in: the search runs for every parent token that
     could change, and generated loops cost a third of an interpreted walk over the levels.
-    """
+    The owner's ``width`` values are read from ``v0``; what the inner conditions bind is
+    kept in locals, and the values tuple is built only for the match returned."""
     namespace: dict[str, object] = {**_CHECK_NAMES, "FLOAT": _FLOAT}
     lines = ["def solve(v0, seed):"]
     depth = 1
     matched: list[str] = []
+    names: dict[int, str] = {}  # value position bound inside -> local name
+
+    def value(pos: int) -> str:
+        return names.get(pos, f"v0[{pos}]")
+
     for k, (wmes, index, pos, getter, check, fields, negated, _) in enumerate(levels):
         pad = "    " * depth
         namespace.update({f"W{k}": wmes, f"I{k}": index, f"G{k}": getter})
-        lines += _bucket_lines(k, pad, f"v{k}", pos, k == seed)
+        lines += _bucket_lines(k, pad, value(pos) if pos >= 0 else None, k == seed)
         lines.append(f"{pad}for w{k} in b{k}:")
         inner = pad + "    "
-        tests = [] if check is None else _check_lines(check.specs, f"v{k}", f"w{k}", "continue",
-                                                      inner)
-        if negated:
-            lines += tests + [f"{inner}break", f"{pad}else:", f"{inner}v{k + 1} = v{k}"]
+        if check is not None:
+            lines += _check_lines(check.specs, "v0", f"w{k}", "continue", inner, value)
+        if negated:  # the levels below are the body of the else: no WME matched
+            lines += [f"{inner}break", f"{pad}else:"]
         else:
-            lines += tests
-            bound = "".join(f"w{k}.{field}, " for field in fields)
-            lines.append(f"{inner}v{k + 1} = v{k} + ({bound})" if bound else
-                         f"{inner}v{k + 1} = v{k}")
+            for field in fields:
+                name = names[width + len(names)] = f"x{width + len(names)}"
+                lines.append(f"{inner}{name} = w{k}.{field}")
             matched.append(f"w{k}")
         depth += 1
     pad = "    " * depth
-    lines.append(f"{pad}return v{len(levels)}, ({''.join(w + ', ' for w in matched)})")
+    bound = "".join(f"{names[p]}, " for p in sorted(names))
+    lines.append(f"{pad}return {f'v0 + ({bound})' if bound else 'v0'},"
+                 f" ({''.join(w + ', ' for w in matched)})")
     lines.append("    return None")
     return define(lines, namespace, "solve")
 
@@ -1214,8 +1223,9 @@ class _QueryNCCNode(_Node):
         self.seed_filters = _seed_filters(levels, width, amems, owner_tests)
         # solvers[0](vals, None): one match of the inner conditions as (vals, wmes), or
         # None; solvers[k + 1](vals, wme): one in which inner condition k matches wme
-        self.solvers = [_compile_query(levels, seed) if seed < 0 or not levels[seed][6] else None
-                        for seed in range(-1, len(levels))]  # negated levels are never seeds
+        self.solvers = [_compile_query(levels, seed, width)  # negated levels are never seeds
+                        if seed < 0 or not levels[seed][6] else None
+                        for seed in range(-1, len(levels))]
         self.owners: dict[_Token, _Token] = {}  # parent token -> this node's token
         self.owner_index: dict[int, dict] = {}  # parent value position -> hashed owners
         for tests in owner_tests:
@@ -1430,7 +1440,7 @@ def _compile_run(node: _RunNode, seed: int) -> Callable:
     for k, (_, index, pos, getter, check, _) in enumerate(members):
         pad = "    " * depth
         namespace.update({f"I{k}": index, f"G{k}": getter})
-        lines += _bucket_lines(k, pad, "vals", pos, k == seed)
+        lines += _bucket_lines(k, pad, f"vals[{pos}]" if pos >= 0 else None, k == seed)
         lines.append(f"{pad}for w{k} in b{k}:")
         if check is not None:
             lines += _check_lines(check.specs, "vals", f"w{k}", "continue", pad + "    ")
@@ -1655,15 +1665,20 @@ _ORDER_OPS = {"<": "<", ">": ">", "<=": "<=", ">=": ">="}
 _CHECK_NAMES: dict[str, object] = {"NUMBERS": _NUMBERS, "RELATIONS": _RELATIONS}
 
 
-def _check_lines(specs: list[BetaSpec], vals: str, w: str, fail: str, pad: str) -> list[str]:
+def _check_lines(specs: list[BetaSpec], vals: str, w: str, fail: str, pad: str,
+                 value: Callable[[int], str] | None = None) -> list[str]:
     """Generated code testing every beta test of a join on the values ``vals`` and the WME
     ``w``, running ``fail`` (``return False``, ``continue``) at the first that does not
     hold.  The join and query loops inline these lines: in the innermost loop a call per
-    pair costs more than the tests themselves."""
+    pair costs more than the tests themselves.  ``value(pos)`` may name a value position
+    otherwise than ``vals[pos]``."""
+    if value is None:
+        def value(pos: int) -> str:
+            return f"{vals}[{pos}]"
     lines = []
     for n, ((lk, la), op, (rk, ra)) in enumerate(specs):
-        left = f"{w}.{la}" if lk == "w" else f"{vals}[{la}]"
-        right = f"{w}.{ra}" if rk == "w" else f"{vals}[{ra}]"
+        left = f"{w}.{la}" if lk == "w" else value(la)  # type: ignore[arg-type]
+        right = f"{w}.{ra}" if rk == "w" else value(ra)  # type: ignore[arg-type]
         x, y = f"cx{n}", f"cy{n}"
         lines.append(f"{x} = {left}; {y} = {right}")
         if op == "=":
