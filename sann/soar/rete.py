@@ -1527,14 +1527,16 @@ class _RunNode(_Node):
 class _ProductionNode(_Node):
     """Bottom of a production: each token is a Match."""
 
-    __slots__ = ("production", "layout", "changes")
+    __slots__ = ("production", "layout", "added", "removed")
 
     def __init__(self, rete: Rete, parent: _Node, production: Production,
                  layout: _Layout) -> None:
         super().__init__(rete, parent, ("production", production.name))
         self.production = production
         self.layout = layout
-        self.changes = rete._changes
+        # the Rete's _Changes, whose dicts are emptied in place (never replaced)
+        self.added = rete._changes.added
+        self.removed = rete._changes.removed
 
     def left_activate(self, t: _Token) -> None:
         match = _new_match(Match)
@@ -1549,12 +1551,17 @@ class _ProductionNode(_Node):
         else:
             siblings[tok] = None
         self.tokens[tok] = None
-        self.changes.added[match] = None
+        self.added[match] = None
 
     def forget(self, tok: _Token) -> None:
         del self.tokens[tok]
-        if tok[5] is not None:  # None: the match moved to a rebuilt network (Rete._rebuild)
-            self.changes.retract(tok[5])
+        match = tok[5]
+        if match is not None:  # None: the match moved to a rebuilt network (Rete._rebuild)
+            # _Changes.retract, inline: an appear/retract pair in one interval cancels out
+            if match in self.added:
+                del self.added[match]
+            else:
+                self.removed[match] = None
 
 
 class _Layout:
