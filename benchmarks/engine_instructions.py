@@ -1,0 +1,85 @@
+"""Machine instructions the engine executes per unit of work, counted by valgrind.
+
+Usage::
+
+    .venv/bin/python benchmarks/engine_instructions.py [--root DIR] [--scenes 20]
+
+engine.py's seconds swing by tens of percent on these shared VMs and engine_ops.py's bytecode
+counts miss what the interpreter does in C (allocation, dict probes, calls, the garbage
+collector).  valgrind's callgrind counts every instruction, the same on every run of the same
+code whatever else the machine does.  Start-up, sourcing and compiling are taken out by
+running each workload at two sizes and keeping the difference: Towers of Hanoi with 7 and 8
+disks (the 128 extra moves), and the block planner of engine.py with 160 warm-up scenes plus
+``--scenes`` or twice as many.  ``--root`` measures another work tree of the project (an
+A/B comparison: run it once per tree).  Needs Debian's ``valgrind``; about two minutes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+WARM_UP = 160  # block scenes before the counted ones: every rule's actions are compiled
+
+
+def work(root: Path, kind: str, size: int) -> None:
+    """The workload itself, run under valgrind: ``size`` disks or counted scenes."""
+    sys.path[:0] = [str(root), str(root / "benchmarks")]
+    import engine
+
+    from sann.soar.agent import Agent
+
+    if kind == "hanoi":
+        agent = Agent(out=io.StringIO())
+        agent.source(str(root / "rules" / "hanoi.soar"))
+        agent.input_link.add("disks", size)
+        agent.run()
+        return
+    planner = engine.OurPlanner()
+    for scene in engine.make_scenes(WARM_UP + size, 26, 0):
+        planner.solve(scene)
+
+
+def instructions(root: Path, kind: str, size: int) -> int:
+    """Instructions of one whole run of the workload (start-up included)."""
+    command = ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
+               sys.executable, __file__, "--root", str(root), "--work", kind, str(size)]
+    env = {**os.environ, "PYTHONHASHSEED": "0", "PYTHONPATH": str(root)}
+    result = subprocess.run(command, capture_output=True, text=True, env=env, check=True)
+    found = re.search(r"Collected : (\d+)", result.stderr)
+    if found is None:
+        raise RuntimeError(f"no instruction count in valgrind's output:\n{result.stderr}")
+    return int(found.group(1))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--root", type=Path, default=ROOT, help="work tree to measure")
+    parser.add_argument("--scenes", type=int, default=20)
+    parser.add_argument("--work", nargs=2, metavar=("KIND", "SIZE"), help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.work:
+        work(args.root.resolve(), args.work[0], int(args.work[1]))
+        return 0
+    if shutil.which("valgrind") is None:
+        parser.error("valgrind is not installed (Debian: apt-get install valgrind)")
+    root = args.root.resolve()
+    hanoi = instructions(root, "hanoi", 8) - instructions(root, "hanoi", 7)
+    scenes = (instructions(root, "blocks", 2 * args.scenes)
+              - instructions(root, "blocks", args.scenes))
+    decisions = 2 ** 8 - 2 ** 7 + 1  # one decision per move, plus one disk laid down
+    print(f"{root}:")
+    print(f"  hanoi:  {hanoi / decisions:,.0f} instructions per decision (7 -> 8 disks)")
+    print(f"  blocks: {scenes / args.scenes:,.0f} instructions per scene ({args.scenes} scenes)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
