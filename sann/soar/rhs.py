@@ -152,17 +152,21 @@ def _sqrt(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
 
 
 def _min(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
-    nums = _numbers("min", args)
-    if not nums:
-        raise SoarRuntimeError("(min): needs at least one argument")
-    return min(nums)
+    return _extreme("min", min, args)
 
 
 def _max(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
-    nums = _numbers("max", args)
+    return _extreme("max", max, args)
+
+
+def _extreme(name: str, pick: Callable[[list], Symbol], args: Sequence[Symbol]) -> Symbol:
+    """As in the kernel (measured): a float among the arguments makes the result a float,
+    ``(max 3 1.5)`` is 3.0."""
+    nums = _numbers(name, args)
     if not nums:
-        raise SoarRuntimeError("(max): needs at least one argument")
-    return max(nums)
+        raise SoarRuntimeError(f"({name}): needs at least one argument")
+    best = pick(nums)
+    return float(best) if any(type(n) is float for n in nums) else best
 
 
 def _round_off(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:

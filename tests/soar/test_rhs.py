@@ -65,7 +65,7 @@ def call(name: str, *args):
         ("ifeq", ("a", "a", "yes", "no"), "yes"),
         ("ifeq", (1, 1.0, "yes", "no"), "no"),
         ("min", (3, 1, 2), 1),
-        ("max", (3, 1, 2.5), 3),
+        ("max", (3, 1, 2.5), 3.0),  # a float argument: a float (measured)
         ("strlen", ("abc",), 3),
         ("trim", ("  x ",), "x"),
         ("sqrt", (4,), 2.0),
@@ -147,3 +147,18 @@ def test_round_off_below_a_tenth_rounds_where_the_kernel_returns_nan() -> None:
     assert format_value(call("round-off", -1.2345, 0.05)) == "-1.250000"
     with pytest.raises(SoarRuntimeError, match="zero"):
         call("round-off", 5, 0)
+
+
+@pytest.mark.parametrize(
+    ("name", "args", "expected"),
+    [  # measured in soar_sml 9.6: a float argument makes the result a float
+        ("max", (3, 1.5, 2), 3.0),
+        ("min", (1, 2.5), 1.0),
+        ("max", (3, 2), 3),
+        ("min", (3, 2.0), 2.0),
+        ("max", (2.0, 3), 3.0),
+    ],
+)
+def test_min_max_result_types_follow_the_kernel(name: str, args: tuple, expected) -> None:
+    result = call(name, *args)
+    assert result == expected and type(result) is type(expected)
