@@ -284,6 +284,8 @@ class Agent:
             self._run_phase()
             if target is not None and self._decisions >= target and self._phase == "apply":
                 break
+        if self._stop and not self._halted and self.trace_level >= 1:
+            self._emit("Interrupt received.")  # at the end of the phase, as the kernel
         return self.stats
 
     def step(self) -> dict[str, int]:
@@ -562,8 +564,9 @@ class Agent:
         self._phase = "input"
 
     def _elaboration_phase(self, apply: bool) -> None:
-        """Run elaboration cycles until quiescence ends the phase, or the run stops (a halt
-        or an interrupt takes effect after the cycle it happened in, as in the kernel)."""
+        """Run elaboration cycles until quiescence ends the phase, or a halt stops the run
+        (after the cycle it happened in). An interrupt stops the run when the phase is over,
+        as in the kernel (measured)."""
         end = "output" if apply else "decide"
         if self._phase_cycles == 0 and apply and self.trace_level >= 2 and self._active is None:
             self._emit("\n--- Application Phase ---\n")
@@ -582,8 +585,8 @@ class Agent:
                 self._emit(f"\nWarning: reached max-elaborations; proceeding to {end} phase.")
                 self._end_phase(apply, end)
                 return
-            if self._stop or self._halted:
-                return
+            if self._halted:
+                return  # an interrupt (_stop) lets the phase finish, as in the kernel
 
     def _end_phase(self, apply: bool, end: str) -> None:
         if self.trace_level >= 2:

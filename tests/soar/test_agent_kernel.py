@@ -95,6 +95,14 @@ sp {sub*a2 (state <s> ^operator.name bump ^superstate <ss>) (<ss> ^phase <p>)
 sp {fin (state <s> ^superstate nil ^phase 4) --> (<s> ^operator <o> + >) (<o> ^name fin)}
 sp {fin*a (state <s> ^operator.name fin) --> (halt)}
 """,
+    # An interrupt in the first wave of the application phase: the phase runs to its end
+    # (the o-supported rules fire in the next wave), then the run stops.
+    "interrupt-finishes-the-phase": """
+sp {p (state <s> ^superstate nil -^done) --> (<s> ^operator <o> +) (<o> ^name go)}
+sp {ra (state <s> ^operator.name go) --> (write |a1 |) (<s> ^done yes)}
+sp {rb (state <s> ^operator.name go) --> (write |a2 |) (interrupt)}
+sp {rc (state <s> ^operator.name go) --> (write |a3 |) (<s> ^also yes)}
+""",
 }
 
 

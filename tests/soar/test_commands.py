@@ -133,8 +133,8 @@ def test_forms_needing_missing_features_are_refused_clearly(text: str, feature: 
 
 def test_settings_through_soar_and_aliases() -> None:
     agent, out = agent_with(
-        "soar max-elaborations 7\nwarnings --off\nmax-goal-depth 9\nalias me soar max-elaborations\n"
-        "me 8\nalias -r me\n"
+        "soar max-elaborations 7\nwarnings --off\nmax-goal-depth 9\n"
+        "alias me soar max-elaborations\nme 8\nalias -r me\n"
     )
     assert agent.max_elaborations == 8
     assert agent.warnings is False and agent.max_goal_depth == 9
