@@ -27,6 +27,7 @@ from .errors import SoarError, SoarRuntimeError
 from .goals import Goal
 from .instantiation import (
     COMPILE_AFTER,
+    MIXED,
     Instantiation,
     ProductionInfo,
     compile_actions,
@@ -790,11 +791,24 @@ class Agent:
                 goal = self._goals.get(ident) if ident is not None else None
                 if goal is None or not goal.alive:
                     continue
-            if is_o_supported(info, wmes, goal.id, match):
+            support = is_o_supported(info, wmes, goal.id, match)
+            if support is MIXED:
+                self._warn_mixed_support(info.production.name)
+                support = False
+            if support:
                 goal.pending_o[match] = info
             else:
                 goal.pending_i[match] = info
             pending_goal[match] = goal
+
+    def _warn_mixed_support(self, name: str, justification: bool = False) -> None:
+        """The kernel's warning for a rule (or justification) that both elaborates and
+        applies its operator: all its preferences get i-support. (Measured: a
+        justification's warning starts on a new line, a rule's does not.)"""
+        if self.warnings:
+            self._emit(("\n" if justification else "")
+                       + "WARNING:  Operator elaborations mixed with operator applications"
+                       f"\nAssigning i_support to prod {name}")
 
     def _creation_key(self, match: object) -> tuple[int, int, int]:
         """Kernel order of match creation: by the newest matched WME; for one WME, by the
@@ -1607,9 +1621,13 @@ class Agent:
             f"justify{self._justifications}", None, home, (), bool(operators), True
         )
         just.grounds = grounds
-        for pref in results:
+        on_operator = [any(pref.id is op for op in operators) for pref in results]
+        mixed = bool(operators) and any(on_operator) and not all(on_operator)
+        if mixed:
+            self._warn_mixed_support(just.name, justification=True)
+        for pref, elaborates in zip(results, on_operator, strict=True):
             copy = Preference(pref.type, pref.id, pref.attr, pref.value, pref.referent, just)
-            copy.o_supported = bool(operators) and not any(pref.id is op for op in operators)
+            copy.o_supported = bool(operators) and not elaborates and not mixed
             just.prefs.append(copy)
         self._new_justifications.append(just)
         self._replace_duplicate_justification(just)

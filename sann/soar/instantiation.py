@@ -340,13 +340,19 @@ def match_goal(wmes: tuple[WME | None, ...]) -> Identifier | None:
     return best
 
 
+#: ``is_o_supported``'s answer for a match that elaborates the operator it tests and also
+#: applies it: the kernel warns and gives all its preferences i-support (measured).
+MIXED = "mixed"
+
+
 def is_o_supported(
     info: ProductionInfo, wmes: tuple[WME | None, ...], goal: Identifier, match: object = None
-) -> bool:
+) -> bool | str:
     """Whether this match fires as an o-assertion (PE) rather than an i-assertion (IE).
 
     It does when the match tests the selected operator of its goal and some action is not an
-    elaboration of that operator."""
+    elaboration of that operator -- unless another action is one: then it is ``MIXED``, an
+    i-assertion with the kernel's warning."""
     if info.declared is not None:
         return info.declared == "o-support"
     operators = None
@@ -363,16 +369,23 @@ def is_o_supported(
     if not make_ids:
         return False  # the kernel fires write/halt-only rules as i-assertions
     bindings = match.bindings if match is not None else {}  # type: ignore[attr-defined]
+    applies = elaborates = False
     for name in make_ids:
         value = bindings.get(name)
         if value is None:
-            return True
-        if type(value) is Identifier:
-            if value not in operators:  # identifiers are equal only to themselves
-                return True
-        elif not any(value is op for op in operators):
-            return True
-    return False
+            applies = True
+        elif type(value) is Identifier:
+            if value in operators:  # identifiers are equal only to themselves
+                elaborates = True
+            else:
+                applies = True
+        elif any(value is op for op in operators):
+            elaborates = True
+        else:
+            applies = True
+    if applies and elaborates:
+        return MIXED
+    return applies
 
 
 def tested_operators(
