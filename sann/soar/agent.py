@@ -1514,7 +1514,9 @@ class Agent:
                 if only and all(p.value is value for p in only):
                     return True
         elif goal.sub is None:
-            return _nothing_to_select(prefs)
+            # No operator and no impasse: nothing to be inconsistent with. The next decision
+            # settles what was proposed meanwhile (measured: pending o-assertions still fire).
+            return True
         impasse, candidates = dec.run_preference_semantics(slot, None, consistency=True)
         selected = goal.selected()
         if selected is not None:
@@ -1849,25 +1851,6 @@ class Agent:
 
     def __repr__(self) -> str:
         return f"<Agent {self.name}: {len(self._productions)} productions, {len(self._wm)} wmes>"
-
-
-def _nothing_to_select(prefs: dict[str, list[Preference]]) -> bool:
-    """Whether preference semantics would find no candidate: no requirement, and every
-    acceptable value rejected or prohibited (a goal with neither a selected operator nor a
-    substate is consistent only then; any candidate at all ends in a selection, a tie, a
-    conflict or a constraint failure)."""
-    if not prefs:
-        return True
-    if REQUIRE in prefs:
-        return False
-    acceptable = prefs.get(ACCEPTABLE)
-    if not acceptable:
-        return True
-    if REJECT not in prefs and PROHIBIT not in prefs:
-        return False
-    excluded = {dec._key(p.value) for p in prefs.get(REJECT, ())}
-    excluded.update(dec._key(p.value) for p in prefs.get(PROHIBIT, ()))
-    return all(dec._key(p.value) in excluded for p in acceptable)
 
 
 class _JustificationMatch:
