@@ -62,12 +62,20 @@ def _numbers(name: str, args: Sequence[Symbol]) -> list[int | float]:
     return [_number(name, a) for a in args]
 
 
+def _int64(value: int | float) -> int | float:
+    """The kernel's integers are 64-bit and wrap around (measured:
+    ``(+ 9223372036854775807 1)`` is -9223372036854775808); floats are left alone."""
+    if type(value) is int and not -(1 << 63) <= value < 1 << 63:
+        return ((value + (1 << 63)) & ((1 << 64) - 1)) - (1 << 63)
+    return value
+
+
 def _plus(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
-    return sum(_numbers("+", args), 0)
+    return _int64(sum(_numbers("+", args), 0))
 
 
 def _times(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
-    return math.prod(_numbers("*", args))
+    return _int64(math.prod(_numbers("*", args)))
 
 
 def _minus(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
@@ -75,11 +83,11 @@ def _minus(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
     if not nums:
         raise SoarRuntimeError("(-): needs at least one argument")
     if len(nums) == 1:
-        return -nums[0]
+        return _int64(-nums[0])
     result = nums[0]
     for n in nums[1:]:
         result -= n
-    return result
+    return _int64(result)
 
 
 def _divide(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:

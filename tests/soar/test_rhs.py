@@ -162,3 +162,16 @@ def test_round_off_below_a_tenth_rounds_where_the_kernel_returns_nan() -> None:
 def test_min_max_result_types_follow_the_kernel(name: str, args: tuple, expected) -> None:
     result = call(name, *args)
     assert result == expected and type(result) is type(expected)
+
+
+@pytest.mark.parametrize(
+    ("name", "args", "expected"),
+    [  # measured in soar_sml 9.6: 64-bit integers that wrap around
+        ("*", (4000000000, 4000000000), -2446744073709551616),
+        ("+", (9223372036854775807, 1), -9223372036854775808),
+        ("-", (-9223372036854775807, 2), 9223372036854775807),
+        ("-", (-9223372036854775808,), -9223372036854775808),
+    ],
+)
+def test_integers_wrap_at_64_bits_like_the_kernel(name: str, args: tuple, expected) -> None:
+    assert call(name, *args) == expected
