@@ -46,6 +46,8 @@ from .production import (
     Const,
     Production,
     Var,
+    duplicate_key,
+    same_production,
 )
 from .rete import negation_matches
 from .rhs import FUNCTIONS, format_value
@@ -89,6 +91,8 @@ class Agent:
         self.exploration = dec.Exploration()
         self.srand(seed)
         self._productions: dict[str, ProductionInfo] = {}
+        # duplicate_key -> names of the loaded productions with it (duplicates are refused)
+        self._by_shape: dict[tuple, list[str]] = {}
         self._load_count = 0
         self._dir_stack: list[Path] = []
         self._pushd: list[Path] = []  # directories pushd put on top of the sourcing file's
@@ -232,6 +236,14 @@ class Agent:
         if production.name in self._productions:
             self._collect_changes(in_match_order=True)
             self.excise(production.name)
+        key = duplicate_key(production)
+        for name in self._by_shape.get(key, ()):
+            if same_production(self._productions[name].production, production):
+                # The kernel refuses it with this line and keeps the first (measured).
+                self._emit_line(f"Ignoring {production.name} because it is a duplicate of"
+                                f" {name} \n")
+                return
+        self._by_shape.setdefault(key, []).append(production.name)
         self.matcher.add_production(production)
         info = ProductionInfo.of(production)
         self._load_count += 1
@@ -243,7 +255,11 @@ class Agent:
         if name not in self._productions:
             raise SoarRuntimeError(f"excise: no production named {name}")
         self.matcher.excise(name)
-        del self._productions[name]
+        info = self._productions.pop(name)
+        same_shape = self._by_shape[duplicate_key(info.production)]
+        same_shape.remove(name)
+        if not same_shape:
+            del self._by_shape[duplicate_key(info.production)]
         self._collect_changes()
 
     def excise_all(self) -> None:

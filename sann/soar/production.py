@@ -172,3 +172,86 @@ class Command:
     name: str
     args: tuple[str, ...]
     location: SourceLocation | None = field(default=None, compare=False)
+
+
+# ----- duplicate productions ------------------------------------------------------------------
+
+
+def shape(item: object) -> object:
+    """``item`` with every variable replaced by one placeholder: equal shapes are what a
+    variable renaming can make equal (hashable, for indexing productions)."""
+    if isinstance(item, Var):
+        return Var
+    if isinstance(item, Conjunction):  # its tests in any order
+        return (Conjunction, tuple(sorted(repr(shape(test)) for test in item.tests)))
+    if isinstance(item, tuple):
+        return tuple(shape(part) for part in item)
+    if hasattr(item, "__dataclass_fields__"):
+        return (type(item), *(shape(getattr(item, name))
+                              for name in item.__dataclass_fields__))  # type: ignore[attr-defined]
+    return item
+
+
+def duplicate_key(production: Production) -> tuple:
+    """What two duplicates share: the conditions' shapes in any order, the actions' in
+    order (see :func:`same_production`)."""
+    return (tuple(sorted(map(repr, map(shape, production.conditions)))),
+            shape(production.actions))
+
+
+def same_production(a: Production, b: Production) -> bool:
+    """Whether the kernel would refuse ``b`` as a duplicate of ``a`` (measured with
+    soar_sml 9.6): the same conditions in any order (and the tests of a ``{ }`` conjunction in
+    any order) and the same actions in the same order, up to a consistent renaming of
+    variables; name, documentation and flags (even ``:o-support``) do not count."""
+    if duplicate_key(a) != duplicate_key(b):
+        return False
+    mapping: dict[str, str] = {}
+    reverse: dict[str, str] = {}
+    if not _match_elements(list(a.conditions), list(b.conditions), mapping, reverse):
+        return False
+    return _unify(a.actions, b.actions, mapping, reverse)
+
+
+def _match_elements(left: list, right: list, mapping: dict[str, str],
+                    reverse: dict[str, str]) -> bool:
+    """Pair every element of ``left`` with one of ``right`` (any order) under one variable
+    renaming, extending ``mapping``/``reverse`` in place on success (backtracking)."""
+    if not left:
+        return not right
+    first, rest = left[0], left[1:]
+    wanted = shape(first)
+    for k, candidate in enumerate(right):
+        if shape(candidate) != wanted:
+            continue
+        trial, trial_reverse = dict(mapping), dict(reverse)
+        if isinstance(first, ConjunctiveNegation):
+            paired = _match_elements(list(first.conditions), list(candidate.conditions),
+                                     trial, trial_reverse)
+        else:
+            paired = _unify(first, candidate, trial, trial_reverse)
+        if paired and _match_elements(rest, right[:k] + right[k + 1:], trial, trial_reverse):
+            mapping.update(trial)
+            reverse.update(trial_reverse)
+            return True
+    return False
+
+
+def _unify(a: object, b: object, mapping: dict[str, str], reverse: dict[str, str]) -> bool:
+    """Whether ``a`` and ``b`` are equal up to the renaming, extending it (a bijection)."""
+    if isinstance(a, Var) and isinstance(b, Var):
+        if mapping.setdefault(a.name, b.name) != b.name:
+            return False
+        return reverse.setdefault(b.name, a.name) == a.name
+    if type(a) is not type(b):
+        return False
+    if isinstance(a, Conjunction):
+        return _match_elements(list(a.tests), list(b.tests), mapping,  # type: ignore[attr-defined]
+                               reverse)
+    if isinstance(a, tuple):
+        return len(a) == len(b) and all(  # type: ignore[arg-type]
+            _unify(x, y, mapping, reverse) for x, y in zip(a, b, strict=True))  # type: ignore[call-overload]
+    if hasattr(a, "__dataclass_fields__"):
+        return all(_unify(getattr(a, name), getattr(b, name), mapping, reverse)
+                   for name in a.__dataclass_fields__)  # type: ignore[attr-defined]
+    return a == b and type(a) is type(b)
