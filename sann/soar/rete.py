@@ -621,29 +621,45 @@ def _index_remove(index: dict, value: object, item: object) -> None:
         del index[key]
 
 
-class _Token(list):
-    """A partial match, as a list for speed (a list is built in C; an object with six
-    attributes costs twice as much, and the Rete makes and drops tokens all the time):
+class _Token:
+    """A partial match: ``parent`` token, ``wme`` (or the tuple of a run node's WMEs),
+    ``vals`` the tuple of variable values bound so far, ``node`` the beta node that owns it
+    (``None`` once deleted), ``children`` a dict of child tokens or None, and ``extra``
+    depends on the node: the blocking WMEs of a negative-node token, the results of an NCC
+    owner, the owner of an NCC partner result, the witness of a query-NCC token, the Match
+    of a production-node token.  Hashed by identity.
 
-    ``[parent, wme, vals, node, children, extra]`` — ``vals`` is the tuple of variable
-    values bound so far, ``node`` the beta node that owns it (``None`` once deleted),
-    ``children`` a dict of child tokens or None, and ``extra`` depends on the node: the
-    blocking WMEs of a negative-node token, the results of an NCC owner, the owner of an NCC
-    partner result, the Match of a production-node token.  Hashed by identity."""
+    Slots, not a list: CPython 3.11 specializes slot reads and writes, not the subscripts of
+    a list subclass (three times slower), and the hot paths read tokens all the time.  The
+    generated code makes tokens inline (``_token_lines``): a call to ``__init__`` would cost
+    more than the six stores."""
 
-    __slots__ = ()
-    __hash__ = object.__hash__  # type: ignore[assignment]
-    __eq__ = object.__eq__  # type: ignore[assignment]
+    __slots__ = ("parent", "wme", "vals", "node", "children", "extra")
 
 
-# Field numbers of a _Token (the hot loops below use the literals).
-_PARENT, _WME, _VALS, _NODE, _CHILDREN, _EXTRA = range(6)
+_new = object.__new__
+
+
+def _new_token(parent: _Token | None, wme: object, vals: tuple, node: _Node,
+               extra: object = None) -> _Token:
+    tok = _new(_Token)
+    tok.parent, tok.wme, tok.vals, tok.node = parent, wme, vals, node
+    tok.children = None
+    tok.extra = extra
+    return tok
+
+
+def _token_lines(pad: str, parent: str, wme: str, vals: str) -> list[str]:
+    """Generated code: ``tok`` = a new token of node ``N`` (``NEW`` and ``Tok`` in the
+    namespace), what ``_new_token`` does, inline."""
+    return [f"{pad}tok = NEW(Tok); tok.parent = {parent}; tok.wme = {wme}; tok.vals = {vals}",
+            f"{pad}tok.node = N; tok.children = tok.extra = None"]
 
 
 def _adopt(parent: _Token, tok: _Token) -> None:
-    children = parent[4]
+    children = parent.children
     if children is None:
-        parent[4] = {tok: None}
+        parent.children = {tok: None}
     else:
         children[tok] = None
 
@@ -771,7 +787,7 @@ class _Node:
         if index is None:
             index = {}
             for tok in self.tokens:
-                _index_add(index, tok[2][pos], tok)
+                _index_add(index, tok.vals[pos], tok)
             self.indexes[pos] = index
             self.index_list.append((pos, index))
         return index
@@ -780,7 +796,7 @@ class _Node:
         """Add an active output token and pass it to the children."""
         self.tokens[tok] = None
         if self.index_list:
-            vals = tok[2]
+            vals = tok.vals
             for pos, index in self.index_list:
                 key = vals[pos]
                 if key.__class__ is float:
@@ -797,7 +813,7 @@ class _Node:
         """Drop an active output token from the memory and its indices."""
         del self.tokens[tok]
         if self.index_list:
-            vals = tok[2]
+            vals = tok.vals
             for pos, index in self.index_list:
                 key = vals[pos]
                 if key.__class__ is float:
@@ -867,8 +883,8 @@ class _JoinNode(_Node):
     def _compile(self) -> None:
         hashed = self.pos >= 0
         namespace: dict[str, object] = {
-            **_CHECK_NAMES, "FLOAT": _FLOAT, "Tok": _Token, "N": self, "E": self.extend,
-            "R": self.registry, "T": self.tokens, "CH": self.children,
+            **_CHECK_NAMES, "FLOAT": _FLOAT, "NEW": _new, "Tok": _Token, "N": self,
+            "E": self.extend, "R": self.registry, "T": self.tokens, "CH": self.children,
             "AB": self.amem.indexes[self.field] if hashed else self.amem.wmes,
             "PB": self.parent.indexes[self.pos] if hashed else self.parent.tokens,  # type: ignore[union-attr]
         }
@@ -879,8 +895,8 @@ class _JoinNode(_Node):
             """Test the pair, make the token, register, index and pass it on."""
             lines = [] if self.check is None else _check_lines(
                 self.check.specs, "vals", "wme", "continue", "")  # type: ignore[attr-defined]
-            lines += [f"new = {grow}", "tok = Tok((t, wme, new, N, None, None))", "s = t[4]",
-                      "if s is None: t[4] = {tok: None}", "else: s[tok] = None", register,
+            lines += [f"new = {grow}", *_token_lines("", "t", "wme", "new"), "s = t.children",
+                      "if s is None: t.children = {tok: None}", "else: s[tok] = None", register,
                       "T[tok] = None"]
             for k, (pos, index) in enumerate(self.index_list):
                 namespace[f"I{k}"] = index
@@ -888,7 +904,7 @@ class _JoinNode(_Node):
             lines += ["for child in CH:", "    child.left_activate(tok)"]
             return ["        " + line for line in lines]
 
-        left = ["def left_activate(t):", "    vals = t[2]"]
+        left = ["def left_activate(t):", "    vals = t.vals"]
         if hashed:
             left += [f"    key = vals[{self.pos}]",
                      "    if key.__class__ is float: key = (FLOAT, key)",
@@ -901,7 +917,7 @@ class _JoinNode(_Node):
                 right.append("    if key.__class__ is float: key = (FLOAT, key)")
             right += ["    bucket = PB.get(key)", "    if bucket is None: return"]
         right += ["    built = R[wme][1]", f"    for t in {'bucket' if hashed else 'PB'}:",
-                  "        vals = t[2]"] + body("built[tok] = None")
+                  "        vals = t.vals"] + body("built[tok] = None")
         self.left_activate = define(left, namespace, "left_activate")
         self.right_activate = define(right, namespace, "right_activate")
         self.amem._relink()  # the alpha memory calls the compiled right_activate from now on
@@ -932,8 +948,8 @@ class _NegativeNode(_Node):
         return list(self.every)
 
     def left_activate(self, t: _Token) -> None:
-        vals = t[2]
-        tok = _Token((t, None, vals, self, None, None))
+        vals = t.vals
+        tok = _new_token(t, None, vals, self)
         _adopt(t, tok)
         self.every[tok] = None
         if self.pos >= 0:
@@ -953,7 +969,7 @@ class _NegativeNode(_Node):
         if blockers is None:
             self.store(tok)
             return
-        tok[5] = blockers
+        tok.extra = blockers
         info = self.rete._wme_info
         for wme in blockers:
             _block(info[wme], tok)
@@ -968,10 +984,10 @@ class _NegativeNode(_Node):
         check = self.check
         info = self.rete._wme_info[wme]
         for tok in bucket:
-            if check is None or check(tok[2], wme):
-                blockers = tok[5]
+            if check is None or check(tok.vals, wme):
+                blockers = tok.extra
                 if blockers is None:
-                    tok[5] = {wme: None}
+                    tok.extra = {wme: None}
                     self.unstore(tok)
                     self.rete._delete_children(tok)
                 else:
@@ -979,18 +995,18 @@ class _NegativeNode(_Node):
                 _block(info, tok)
 
     def unblock(self, tok: _Token) -> None:
-        tok[5] = None
+        tok.extra = None
         self.store(tok)
 
     def forget(self, tok: _Token) -> None:
         del self.every[tok]
         if self.pos >= 0:
-            _index_remove(self.every_index, tok[2][self.pos], tok)
-        if tok[5] is None:
+            _index_remove(self.every_index, tok.vals[self.pos], tok)
+        if tok.extra is None:
             self.unstore(tok)
             return
         info = self.rete._wme_info
-        for wme in tok[5]:
+        for wme in tok.extra:
             record = info.get(wme)
             if record is not None and record[2]:
                 record[2].pop(tok, None)
@@ -1021,10 +1037,10 @@ def _unlink_tokens(root: _Token) -> None:
     stack = [root]
     while stack:
         tok = stack.pop()
-        children = tok[4]
+        children = tok.children
         if children:
             stack.extend(children)
-        tok[4] = tok[5] = None
+        tok.children = tok.extra = None
 
 
 def _block(record: list, tok: _Token) -> None:
@@ -1050,41 +1066,41 @@ class _NCCNode(_Node):
         return list(self.owners.values())
 
     def left_activate(self, t: _Token) -> None:
-        tok = _Token((t, None, t[2], self, None, None))
+        tok = _new_token(t, None, t.vals, self)
         _adopt(t, tok)
         self.owners[t] = tok
         results = self.partner.buffer.pop(t, None)  # type: ignore[union-attr]
         if results:
-            tok[5] = results
+            tok.extra = results
             for result in results:
-                result[5] = tok
+                result.extra = tok
         else:
             self.store(tok)
 
     def block(self, owner: _Token, result: _Token) -> None:
-        results = owner[5]
+        results = owner.extra
         if results is None:
-            owner[5] = {result: None}
+            owner.extra = {result: None}
             self.unstore(owner)
             self.rete._delete_children(owner)
         else:
             results[result] = None
 
     def release(self, owner: _Token, result: _Token) -> None:
-        results = owner[5]
+        results = owner.extra
         del results[result]
         # An owner whose parent is being deleted stays blocked (and unstored) until its turn.
-        if not results and owner[0][3] is not None:
-            owner[5] = None
+        if not results and owner.parent.node is not None:
+            owner.extra = None
             self.store(owner)
 
     def forget(self, tok: _Token) -> None:
-        del self.owners[tok[0]]
-        if tok[5] is None:
+        del self.owners[tok.parent]
+        if tok.extra is None:
             self.unstore(tok)
             return
-        for result in tok[5]:
-            result[5] = None
+        for result in tok.extra:
+            result.extra = None
 
 
 class _PartnerNode(_Node):
@@ -1102,11 +1118,11 @@ class _PartnerNode(_Node):
     def _owner_key(self, bottom: _Token) -> _Token:
         t = bottom
         for _ in range(self.levels):
-            t = t[0]
+            t = t.parent
         return t
 
     def left_activate(self, bottom: _Token) -> None:
-        result = _Token((bottom, None, (), self, None, None))
+        result = _new_token(bottom, None, (), self)
         _adopt(bottom, result)
         self.tokens[result] = None
         t = self._owner_key(bottom)
@@ -1118,17 +1134,17 @@ class _PartnerNode(_Node):
             else:
                 waiting[result] = None
             return
-        result[5] = owner
+        result.extra = owner
         self.ncc.block(owner, result)
 
     def forget(self, result: _Token) -> None:
         del self.tokens[result]
-        owner = result[5]
+        owner = result.extra
         if owner is None:
-            waiting = self.buffer.get(self._owner_key(result[0]))
+            waiting = self.buffer.get(self._owner_key(result.parent))
             if waiting is not None:
                 waiting.pop(result, None)
-        elif owner[3] is not None:
+        elif owner.node is not None:
             self.ncc.release(owner, result)
 
 
@@ -1195,7 +1211,7 @@ class _QueryNCCNode(_Node):
     negated conditions; when a WME those partial matches join on changes (a disk moving in
     the Towers of Hanoi) they are all deleted and rebuilt, and in Python a token costs a few
     microseconds.  This node keeps, per blocked parent token, one *witness*: the WMEs and
-    bindings of one match of the inner conditions (``tok[5] = (vals, wmes)``).  The query
+    bindings of one match of the inner conditions (``tok.extra = (vals, wmes)``).  The query
     runs again for a token only when a WME of its witness goes, or a WME arrives that an
     inner negated condition rejects the witness with.  A WME entering the memory of an
     inner positive condition is tried as a seed against the unblocked tokens it could join
@@ -1259,37 +1275,38 @@ class _QueryNCCNode(_Node):
         among the owners, search once, then pass it on or keep the witness) and ``forget``
         (its undoing) as straight-line code, with the node's indices fixed in it."""
         namespace: dict[str, object] = {
-            "FLOAT": _FLOAT, "Tok": _Token, "N": self, "OWN": self.owners, "T": self.tokens,
-            "CH": self.children, "R": self.rete._wme_info, "SOLVE": self.solvers[0]}
-        left = ["def left_activate(t):", "    vals = t[2]",
-                "    tok = Tok((t, None, vals, N, None, None))", "    s = t[4]",
-                "    if s is None: t[4] = {tok: None}", "    else: s[tok] = None",
+            "FLOAT": _FLOAT, "NEW": _new, "Tok": _Token, "N": self, "OWN": self.owners,
+            "T": self.tokens, "CH": self.children, "R": self.rete._wme_info,
+            "SOLVE": self.solvers[0]}
+        left = ["def left_activate(t):", "    vals = t.vals",
+                *_token_lines("    ", "t", "None", "vals"), "    s = t.children",
+                "    if s is None: t.children = {tok: None}", "    else: s[tok] = None",
                 "    OWN[t] = tok"]
-        forget = ["def forget(tok):", "    del OWN[tok[0]]", "    vals = tok[2]"]
+        forget = ["def forget(tok):", "    del OWN[tok.parent]", "    vals = tok.vals"]
         for k, (pos, index) in enumerate(self.owner_index.items()):
             namespace[f"O{k}"] = index
             left += _filing_lines(f"O{k}", f"vals[{pos}]", "tok", "    ", True)
             forget += _key_lines(f"vals[{pos}]", "    ", True) + [
                 f"    b = O{k}[key]", "    del b[tok]", f"    if not b: del O{k}[key]"]
         left += ["    found = SOLVE(vals, None)", "    if found is None:", "        T[tok] = None"]
-        forget += ["    found = tok[5]", "    if found is None:", "        del T[tok]"]
+        forget += ["    found = tok.extra", "    if found is None:", "        del T[tok]"]
         for k, (pos, index) in enumerate(self.index_list):
             namespace[f"I{k}"] = index
             left += _filing_lines(f"I{k}", f"vals[{pos}]", "tok", "        ", True)
             forget += _key_lines(f"vals[{pos}]", "        ", True) + [
                 f"        b = I{k}[key]", "        del b[tok]", f"        if not b: del I{k}[key]"]
         left += ["        for child in CH:", "            child.left_activate(tok)",
-                 "        return", "    tok[5] = found",  # blocked: register the witness
+                 "        return", "    tok.extra = found",  # blocked: register the witness
                  "    for w in found[1]:", "        record = R[w]", "        s = record[3]",
                  "        if s is None: record[3] = {tok: None}", "        else: s[tok] = None"]
         forget += ["        return", "    for w in found[1]:", "        record = R.get(w)",
                    "        if record is not None and record[3]: record[3].pop(tok, None)",
-                   "    tok[5] = None"]
+                   "    tok.extra = None"]
         self.left_activate = define(left, namespace, "left_activate")  # type: ignore[method-assign]
         self.forget = define(forget, dict(namespace), "forget")  # type: ignore[method-assign]
 
     def _witness(self, tok: _Token, found: tuple[tuple, tuple]) -> None:
-        tok[5] = found
+        tok.extra = found
         info = self.rete._wme_info
         for w in found[1]:
             record = info[w]
@@ -1300,11 +1317,11 @@ class _QueryNCCNode(_Node):
 
     def _unwitness(self, tok: _Token) -> None:
         info = self.rete._wme_info
-        for w in tok[5][1]:
+        for w in tok.extra[1]:
             record = info.get(w)
             if record is not None and record[3]:
                 record[3].pop(tok, None)
-        tok[5] = None
+        tok.extra = None
 
     def _block(self, tok: _Token, found: tuple[tuple, tuple]) -> None:
         self.unstore(tok)
@@ -1314,7 +1331,7 @@ class _QueryNCCNode(_Node):
     def recheck(self, tok: _Token) -> None:
         """The witness of a blocked token is gone: find another, or pass the token on."""
         self._unwitness(tok)
-        found = self.solvers[0](tok[2], None)
+        found = self.solvers[0](tok.vals, None)
         if found is None:
             self.store(tok)
         else:
@@ -1336,14 +1353,14 @@ class _QueryNCCNode(_Node):
             return list(found)
         rest = [(getter(wme), pos) for getter, pos in tests[1:]]
         return [tok for tok in found
-                if all(same_symbol(tok[2][pos], value) for value, pos in rest)]
+                if all(same_symbol(tok.vals[pos], value) for value, pos in rest)]
 
     def inner_added(self, k: int, wme: WME) -> None:
         if self.levels[k][6]:  # negated: the witnesses it matches are no longer results
             _, _, pos, getter, check, _, _, _ = self.levels[k]
             for tok in self._candidates(k, wme):
-                found = tok[5]
-                if found is None or tok[3] is None:
+                found = tok.extra
+                if found is None or tok.node is None:
                     continue
                 vals = found[0]
                 if pos >= 0 and not same_symbol(vals[pos], getter(wme)):
@@ -1358,16 +1375,16 @@ class _QueryNCCNode(_Node):
             if key not in index:
                 return  # joins with no WME of another inner condition: blocks nobody
         for tok in self._candidates(k, wme):
-            if tok[5] is None and tok[3] is not None:
-                found = self.solvers[k + 1](tok[2], wme)
+            if tok.extra is None and tok.node is not None:
+                found = self.solvers[k + 1](tok.vals, wme)
                 if found is not None:
                     self._block(tok, found)
 
     def inner_removed(self, k: int, wme: WME) -> None:
         """A WME left a negated inner condition's memory: results may appear."""
         for tok in self._candidates(k, wme):
-            if tok[5] is None and tok[3] is not None:
-                found = self.solvers[0](tok[2], None)
+            if tok.extra is None and tok.node is not None:
+                found = self.solvers[0](tok.vals, None)
                 if found is not None:
                     self._block(tok, found)
 
@@ -1425,17 +1442,17 @@ def _compile_run(node: _RunNode, seed: int) -> Callable:
     below a new parent token ``t``; otherwise ``right_activate(seed)``, the combinations in
     which member ``seed`` matches the WME just added, below every parent token it joins."""
     members = node.members
-    namespace: dict[str, object] = {**_CHECK_NAMES, "FLOAT": _FLOAT, "Tok": _Token,
+    namespace: dict[str, object] = {**_CHECK_NAMES, "FLOAT": _FLOAT, "NEW": _new, "Tok": _Token,
                                     "N": node, "R": node.registry, "T": node.tokens,
                                     "CH": node.children}
     if seed < 0:
-        lines, depth = ["def make(t):", "    vals = t[2]"], 1
+        lines, depth = ["def make(t):", "    vals = t.vals"], 1
     else:
         namespace["PI"] = node.parent.index(members[seed][2])  # type: ignore[union-attr]
         lines = ["def right_activate(seed):", f"    key = G{seed}(seed)",
                  "    if key.__class__ is float: key = (FLOAT, key)",
                  "    bucket = PI.get(key)", "    if not bucket: return",
-                 "    for t in list(bucket):", "        vals = t[2]"]
+                 "    for t in list(bucket):", "        vals = t.vals"]
         depth = 2
     for k, (_, index, pos, getter, check, _) in enumerate(members):
         pad = "    " * depth
@@ -1448,16 +1465,15 @@ def _compile_run(node: _RunNode, seed: int) -> Callable:
     pad = "    " * depth
     bound = "".join(f"w{k}.{field}, " for k, member in enumerate(members) for field in member[5])
     wmes = "".join(f"w{k}, " for k in range(len(members)))
-    lines += [f"{pad}tok = Tok((t, ({wmes}), {f'vals + ({bound})' if bound else 'vals'},"
-              " N, None, None))",
-              f"{pad}s = t[4]",
-              f"{pad}if s is None: t[4] = {{tok: None}}",
+    lines += [*_token_lines(pad, "t", f"({wmes})", f"vals + ({bound})" if bound else "vals"),
+              f"{pad}s = t.children",
+              f"{pad}if s is None: t.children = {{tok: None}}",
               f"{pad}else: s[tok] = None"]
     lines += [f"{pad}R[w{k}][1][tok] = None" for k in range(len(members))]
     lines.append(f"{pad}T[tok] = None")
     for k, (pos, index) in enumerate(node.index_list):
         namespace[f"X{k}"] = index
-        lines += _filing_lines(f"X{k}", f"tok[2][{pos}]", "tok", pad, True)
+        lines += _filing_lines(f"X{k}", f"tok.vals[{pos}]", "tok", pad, True)
     lines += [f"{pad}for child in CH:", f"{pad}    child.left_activate(tok)"]
     return define(lines, namespace, "make" if seed < 0 else "right_activate")
 
@@ -1468,7 +1484,7 @@ class _RunNode(_Node):
     or ``(<o> ^disk <d>) (<o> ^from <f>)`` once ``<o>`` is.
 
     Such conditions are independent of one another, so their join is the product of their
-    matches: one token per combination (``tok[1]`` is the tuple of its WMEs, ``tok[2]`` the
+    matches: one token per combination (``tok.wme`` is the tuple of its WMEs, ``tok.vals`` the
     values extended by what they bind), instead of a chain of nodes with a token per
     condition, most of which die a level or two further down.  In the block planner's
     geometry rules every pair of blocks goes through six filters; as a chain they made three
@@ -1501,10 +1517,10 @@ class _RunNode(_Node):
         lines = ["def forget(tok):", "    del T[tok]"]
         for k, (pos, index) in enumerate(self.index_list):
             namespace[f"I{k}"] = index
-            lines += _key_lines(f"tok[2][{pos}]", "    ", True) + [
+            lines += _key_lines(f"tok.vals[{pos}]", "    ", True) + [
                 f"    b = I{k}[key]", "    del b[tok]", f"    if not b: del I{k}[key]"]
         wmes = [f"w{k}" for k in range(len(self.members))]
-        lines.append(f"    {', '.join(wmes)}, = tok[1]")
+        lines.append(f"    {', '.join(wmes)}, = tok.wme")
         for w in wmes:
             lines += [f"    r = R.get({w})", "    if r is not None: r[1].pop(tok, None)"]
         self.forget = define(lines, namespace, "forget")
@@ -1544,10 +1560,13 @@ class _ProductionNode(_Node):
         match._wmes = match._newest = match._bindings = None
         match._token = t
         match._layout = self.layout
-        tok = _Token((t, None, None, self, None, match))
-        siblings = t[4]
+        tok = _new(_Token)
+        tok.parent, tok.wme, tok.vals, tok.node = t, None, None, self
+        tok.children = None
+        tok.extra = match
+        siblings = t.children
         if siblings is None:
-            t[4] = {tok: None}
+            t.children = {tok: None}
         else:
             siblings[tok] = None
         self.tokens[tok] = None
@@ -1555,7 +1574,7 @@ class _ProductionNode(_Node):
 
     def forget(self, tok: _Token) -> None:
         del self.tokens[tok]
-        match = tok[5]
+        match = tok.extra
         if match is not None:  # None: the match moved to a rebuilt network (Rete._rebuild)
             # _Changes.retract, inline: an appear/retract pair in one interval cancels out
             if match in self.added:
@@ -1591,11 +1610,11 @@ class _Layout:
         last = len(self.levels) - 1
         for k, level in enumerate(self.levels):
             if len(level) > 1:
-                lines.append(f"    {', '.join(f'w{i}' for i in level)}, = tok[1]")
+                lines.append(f"    {', '.join(f'w{i}' for i in level)}, = tok.wme")
             elif level[0] in self.positive:
-                lines.append(f"    w{level[0]} = tok[1]")
+                lines.append(f"    w{level[0]} = tok.wme")
             if k < last:
-                lines.append("    tok = tok[0]")
+                lines.append("    tok = tok.parent")
         lines.append("    newest, at = 0, -1")
         for i in sorted(self.positive):
             lines.append(f"    if w{i}.timetag > newest: newest, at = w{i}.timetag, {i}")
@@ -1607,7 +1626,7 @@ class _Layout:
     def _compile_bindings(self, tok: _Token) -> dict[str, Symbol]:
         """Generate ``bindings_of``: the variables' values as a dict literal."""
         items = "".join(f"{name!r}: v[{pos}], " for name, pos in self.bindings)
-        lines = ["def bindings_of(tok):", "    v = tok[2]", f"    return {{{items}}}"]
+        lines = ["def bindings_of(tok):", "    v = tok.vals", f"    return {{{items}}}"]
         self.bindings_of = define(lines, {}, "bindings_of")  # type: ignore[method-assign]
         return self.bindings_of(tok)
 
@@ -2010,7 +2029,7 @@ class Rete:
     def __init__(self, check_links: bool = True) -> None:
         self.check_links = check_links
         self._root = _Node(self, None)
-        self._root_token = _Token((None, None, (), self._root, None, None))
+        self._root_token = _new_token(None, None, (), self._root)
         self._root.tokens[self._root_token] = None
         self._pnodes: dict[str, _ProductionNode] = {}
         self._productions: dict[str, Production] = {}  # in the order added
@@ -2064,19 +2083,19 @@ class Rete:
     def _rebuild(self, old: _ProductionNode) -> None:
         """Rebuild a production with the current join order; its live matches keep their
         identity (same WMEs, same Match object), so no change is reported for them."""
-        live = {tuple(map(id, tok[5].wmes)): tok for tok in old.tokens}
+        live = {tuple(map(id, tok.extra.wmes)): tok for tok in old.tokens}
         added = self._changes.added
         new = self._build(old.production)
         for tok in new.tokens:
-            match = tok[5]
+            match = tok.extra
             previous = live.pop(tuple(map(id, match.wmes)), None)
             if previous is None:
                 continue
-            kept = previous[5]
-            previous[5] = None  # its old token leaves without retracting it
+            kept = previous.extra
+            previous.extra = None  # its old token leaves without retracting it
             added.pop(match, None)
             kept._token, kept._layout = match._token, match._layout
-            tok[5] = kept
+            tok.extra = kept
         self._remove_node(old)
 
     def _build(self, production: Production) -> _ProductionNode:
@@ -2148,25 +2167,25 @@ class Rete:
             # deleted once).
             doomed = []
             for tok in built:
-                if tok[3] is not None:
-                    del tok[0][4][tok]
+                if tok.node is not None:
+                    del tok.parent.children[tok]
                     doomed.append(tok)
             doomed.reverse()  # the walk pops from the end: the first built goes first
             self._delete_tokens(doomed)
         blocked = info[2]
         if blocked:
             for tok in blocked:
-                node = tok[3]
+                node = tok.node
                 if node is not None:
-                    blockers = tok[5]
+                    blockers = tok.extra
                     del blockers[wme]
                     if not blockers:
                         node.unblock(tok)
         witnessed = info[3]
         if witnessed:
             for tok in list(witnessed):
-                node = tok[3]
-                if node is not None and tok[5] is not None:
+                node = tok.node
+                if node is not None and tok.extra is not None:
                     node.recheck(tok)
         for amem in info[0]:
             if amem.listeners:
@@ -2182,8 +2201,8 @@ class Rete:
             self._flush()
         for pnode in self._pnodes.values():
             for tok in pnode.tokens:
-                if tok[5] is not None:
-                    self._changes.retract(tok[5])
+                if tok.extra is not None:
+                    self._changes.retract(tok.extra)
         self._wme_info.clear()
         for amem in self._amems.values():
             amem.wmes.clear()
@@ -2229,7 +2248,7 @@ class Rete:
         pnode = self._pnodes.get(name)
         if pnode is None:
             raise KeyError(f"no production named {name!r}")
-        return [tok[5] for tok in pnode.tokens]
+        return [tok.extra for tok in pnode.tokens]
 
     def productions(self) -> list[Production]:
         return list(self._productions.values())
@@ -2480,8 +2499,8 @@ class Rete:
             return
         parent = node.parent
         for tok in node.all_tokens():
-            if tok[3] is not None:
-                tok[0][4].pop(tok, None)
+            if tok.node is not None:
+                tok.parent.children.pop(tok, None)
                 self._delete_tokens([tok])
         parent.children.remove(node)
         if parent.child_map.get(node.key) is node:
@@ -2508,9 +2527,9 @@ class Rete:
         self._remove_node(parent)
 
     def _delete_children(self, tok: _Token) -> None:
-        children = tok[4]
+        children = tok.children
         if children:
-            tok[4] = None
+            tok.children = None
             self._delete_tokens(list(children))
 
     def _delete_tokens(self, stack: list[_Token]) -> None:
@@ -2522,13 +2541,13 @@ class Rete:
         join = _JoinNode
         while stack:
             tok = stack.pop()
-            node = tok[3]
+            node = tok.node
             if node is None:
                 continue
             if node.__class__ is join:
                 del node.tokens[tok]
                 if node.index_list:
-                    vals = tok[2]
+                    vals = tok.vals
                     for pos, index in node.index_list:
                         key = vals[pos]
                         if key.__class__ is float:
@@ -2537,13 +2556,13 @@ class Rete:
                         del bucket[tok]
                         if not bucket:
                             del index[key]
-                record = info.get(tok[1])
+                record = info.get(tok.wme)
                 if record is not None:
                     del record[1][tok]
             else:
                 node.forget(tok)
-            tok[3] = None
-            children = tok[4]
+            tok.node = None
+            children = tok.children
             if children:
-                tok[4] = None
+                tok.children = None
                 stack.extend(children)
