@@ -141,54 +141,25 @@ class Match:
     Compared and hashed by identity: the object reported as retracted is the same object
     that was reported when the match appeared.  ``wmes`` has one entry per top-level
     condition element in written order (``None`` for negations); ``bindings`` maps every
-    variable bound by the positive conditions (name without brackets) to its value.  The
-    Rete computes both lazily from its token, since many matches are never looked at.
-    """
+    variable bound by the positive conditions (name without brackets) to its value;
+    ``newest`` is the timetag of the newest matched WME and the first written index it is
+    at (``(0, -1)`` without any): the order of match creation in the kernel's Rete.
 
-    __slots__ = ("production", "_wmes", "_newest", "_bindings", "_token", "_layout")
+    Plain slots, filled when the match is made (the Rete's generated ``_Layout.match_of``):
+    most matches are fired, and CPython 3.11 reads a property through a C call into a new
+    interpreter frame, several times the cost of the slot read."""
 
-    def __init__(
-        self,
-        production: Production,
-        wmes: tuple[WME | None, ...] | None = None,
-        bindings: dict[str, Symbol] | None = None,
-    ) -> None:
+    __slots__ = ("production", "wmes", "newest", "bindings")
+
+    def __init__(self, production: Production, wmes: tuple[WME | None, ...],
+                 bindings: dict[str, Symbol]) -> None:
         self.production = production
-        self._wmes = wmes
-        self._newest: tuple[int, int] | None = None
-        self._bindings = bindings
-        self._token: object = None
-        self._layout: object = None
-
-    @property
-    def wmes(self) -> tuple[WME | None, ...]:
-        if self._wmes is None:
-            self._wmes, self._newest = self._layout.wmes_of(self._token)  # type: ignore[union-attr]
-        return self._wmes
-
-    @property
-    def newest(self) -> tuple[int, int]:
-        """The timetag of the newest matched WME and the first written index it is at
-        (``(0, -1)`` without any): the order of match creation in the kernel's Rete.  The
-        Rete finds it while laying out ``wmes``."""
-        if self._newest is None:
-            if self._wmes is None and self._layout is not None:
-                self._wmes, self._newest = self._layout.wmes_of(self._token)  # type: ignore[attr-defined]
-            else:
-                self._newest = _newest_of(self.wmes)
-        return self._newest
-
-    @property
-    def bindings(self) -> dict[str, Symbol]:
-        if self._bindings is None:
-            self._bindings = self._layout.bindings_of(self._token)  # type: ignore[union-attr]
-        return self._bindings
+        self.wmes = wmes
+        self.bindings = bindings
+        self.newest = _newest_of(wmes)
 
     def __repr__(self) -> str:
         return f"Match({self.production.name}, {list(self.wmes)})"
-
-
-_new_match = object.__new__  # a Match without the keyword handling of __init__ (hot path)
 
 
 def _newest_of(wmes: tuple[WME | None, ...]) -> tuple[int, int]:
@@ -1555,11 +1526,7 @@ class _ProductionNode(_Node):
         self.removed = rete._changes.removed
 
     def left_activate(self, t: _Token) -> None:
-        match = _new_match(Match)
-        match.production = self.production
-        match._wmes = match._newest = match._bindings = None
-        match._token = t
-        match._layout = self.layout
+        match = self.layout.match_of(t)
         tok = _new(_Token)
         tok.parent, tok.wme, tok.vals, tok.node = t, None, None, self
         tok.children = None
@@ -1586,27 +1553,30 @@ class _ProductionNode(_Node):
 class _Layout:
     """Where a production's WMEs and variables sit in its tokens.
 
-    ``wmes_of`` and ``bindings_of`` are generated for the production (on first use) as
-    straight-line code: every fired match needs both, and a loop over the levels that
-    tests each one's kind costs twice as much."""
+    ``match_of`` is generated for the production (on first use) as straight-line code that
+    makes the Match of a token: a loop over the levels that tests each one's kind costs
+    twice as much, and most matches are fired, which needs all their fields."""
 
-    __slots__ = ("levels", "size", "bindings", "positive", "wmes_of", "bindings_of")
+    __slots__ = ("production", "levels", "size", "bindings", "positive", "match_of")
 
-    def __init__(self, levels: list[tuple[int, ...]], bindings: list[tuple[str, int]],
-                 positive: set[int]) -> None:
+    def __init__(self, production: Production, levels: list[tuple[int, ...]],
+                 bindings: list[tuple[str, int]], positive: set[int]) -> None:
+        self.production = production
         # levels[k] = written indices of the elements matched at token level k: one, or
         # several for a run of independent conditions (whose token holds a tuple of WMEs)
         self.levels = levels[::-1]
         self.size = sum(len(level) for level in levels)
         self.bindings = bindings
         self.positive = positive  # written indices of the positive conditions
-        self.wmes_of: Callable[[_Token], tuple[tuple, tuple[int, int]]] = self._compile_wmes
-        self.bindings_of: Callable[[_Token], dict[str, Symbol]] = self._compile_bindings
+        self.match_of: Callable[[_Token], Match] = self._compile_then_match
 
-    def _compile_wmes(self, tok: _Token) -> tuple[tuple, tuple[int, int]]:
-        """Generate ``wmes_of``: a match's WMEs in written order (``None`` for negations),
-        and ``Match.newest`` (the first index of the newest WME, found in written order)."""
-        lines = ["def wmes_of(tok):"]
+    def _compile_then_match(self, tok: _Token) -> Match:
+        """Generate ``match_of``: the WMEs in written order (``None`` for negations),
+        ``newest`` (the first index of the newest WME, found in written order), and the
+        variables' values as a dict literal."""
+        items = "".join(f"{name!r}: v[{pos}], " for name, pos in self.bindings)
+        lines = ["def match_of(tok):", "    m = NEW(Match)", "    m.production = P",
+                 "    v = tok.vals", f"    m.bindings = {{{items}}}"]
         last = len(self.levels) - 1
         for k, level in enumerate(self.levels):
             if len(level) > 1:
@@ -1619,16 +1589,10 @@ class _Layout:
         for i in sorted(self.positive):
             lines.append(f"    if w{i}.timetag > newest: newest, at = w{i}.timetag, {i}")
         written = "".join(f"w{i}, " if i in self.positive else "None, " for i in range(self.size))
-        lines.append(f"    return ({written}), (newest, at)")
-        self.wmes_of = define(lines, {}, "wmes_of")  # type: ignore[method-assign]
-        return self.wmes_of(tok)
-
-    def _compile_bindings(self, tok: _Token) -> dict[str, Symbol]:
-        """Generate ``bindings_of``: the variables' values as a dict literal."""
-        items = "".join(f"{name!r}: v[{pos}], " for name, pos in self.bindings)
-        lines = ["def bindings_of(tok):", "    v = tok.vals", f"    return {{{items}}}"]
-        self.bindings_of = define(lines, {}, "bindings_of")  # type: ignore[method-assign]
-        return self.bindings_of(tok)
+        lines += [f"    m.wmes = ({written})", "    m.newest = (newest, at)", "    return m"]
+        namespace = {"NEW": _new, "Match": Match, "P": self.production}
+        self.match_of = define(lines, namespace, "match_of")  # type: ignore[method-assign]
+        return self.match_of(tok)
 
 
 # ----- compiling conditions -------------------------------------------------------------------
@@ -2094,7 +2058,6 @@ class Rete:
             kept = previous.extra
             previous.extra = None  # its old token leaves without retracting it
             added.pop(match, None)
-            kept._token, kept._layout = match._token, match._layout
             tok.extra = kept
         self._remove_node(old)
 
@@ -2106,8 +2069,8 @@ class Rete:
                                            _singletons(production), set(), runs=True)
         positive = {i for i, element in enumerate(conditions)
                     if isinstance(element, Condition) and not element.negated}
-        layout = _Layout(levels, sorted((n, p) for n, p in var_pos.items() if n in scope),
-                         positive)
+        bindings = sorted((n, p) for n, p in var_pos.items() if n in scope)
+        layout = _Layout(production, levels, bindings, positive)
         pnode = _ProductionNode(self, bottom, production, layout)
         bottom.children.append(pnode)
         self._pnodes[production.name] = pnode
