@@ -55,6 +55,8 @@ from .trace import print_identifier, trace_preference, trace_wme
 
 PHASES = ("input", "propose", "decide", "apply", "output")
 
+_new = object.__new__
+
 
 def _default_matcher() -> type:
     from .rete import Rete
@@ -468,7 +470,11 @@ class Agent:
 
     def _add_wme(self, ident: Identifier, attr: Symbol, value: Symbol, acceptable=False) -> WME:
         timetag = self._timetag = self._timetag + 1
-        wme = WME(ident, attr, value, timetag, acceptable)
+        # WME.__init__, inline: CPython 3.11 runs a class's Python __init__ through a C
+        # call into a new interpreter frame, and every WME of a run is made here
+        wme = _new(WME)
+        wme.id, wme.attr, wme.value, wme.timetag, wme.acceptable = (
+            ident, attr, value, timetag, acceptable)
         wm = self._wm
         wm[timetag] = wme
         if type(value) is Identifier and value.level is None:
@@ -852,7 +858,10 @@ class Agent:
     ) -> Instantiation:
         """Fire a match (``o_support``: it was queued as an o-assertion)."""
         name = info.production.name
-        inst = Instantiation(name, match, goal, match.wmes, o_support)  # type: ignore[attr-defined]
+        inst = _new(Instantiation)  # Instantiation.__init__, inline (see _add_wme)
+        inst.name, inst.match, inst.goal, inst.wmes = name, match, goal, match.wmes  # type: ignore[attr-defined]
+        inst.prefs, inst.o_support, inst.is_justification = [], o_support, False
+        inst.grounds, inst.retracted = (), False
         self._firings += 1
         info.firings += 1
         if self.trace_level >= 3:

@@ -198,6 +198,7 @@ class _RhsCompiler:
         self.bound = bound
         self.namespace: dict[str, object] = {
             "Preference": Preference,
+            "NEW": object.__new__,
             "Identifier": Identifier,
             "SoarError": SoarError,
             "SoarRuntimeError": SoarRuntimeError,
@@ -248,9 +249,12 @@ class _RhsCompiler:
             f"{ind}    agent._emit('\\nError: production ' + inst.name + ' makes a preference"
             f" for a non-identifier ' + format_value({ident}) + '; action ignored.')",
             f"{ind}else:",
-            f"{ind}    p = Preference({ptype}, {ident}, {attr}, {value}, {referent}, inst)",
-            f"{ind}    if o_support and {ident} not in operators:",
-            f"{ind}        p.o_supported = True",
+            # Preference.__init__, inline: CPython 3.11 runs a class's Python __init__
+            # through a C call into a new interpreter frame
+            f"{ind}    p = NEW(Preference); p.type = {ptype}; p.id = {ident}; p.attr = {attr}",
+            f"{ind}    p.value = {value}; p.referent = {referent}; p.inst = inst",
+            f"{ind}    p.o_supported = o_support and {ident} not in operators",
+            f"{ind}    p.slot = None; p.live = False",
             f"{ind}    append(p)",
         ]
 
