@@ -15,6 +15,7 @@ if TYPE_CHECKING:
     from .agent import Agent
 
 _MISSING = object()
+_new = object.__new__
 
 InputValue = Union[str, int, float, "InputHandle"]
 
@@ -73,8 +74,9 @@ class InputHandle:
             raise SoarRuntimeError(f"input attribute must be a non-empty string, got {attr!r}")
         kind = type(value)
         if kind is str or kind is int or kind is float:  # the common case, checked first
-            ident = self.identifier
-            handle = WMEHandle(agent, ident, attr, value)  # type: ignore[arg-type]
+            handle = _new(WMEHandle)  # WMEHandle.__init__, inline (a class call costs a C frame)
+            handle._agent, handle.id, handle.attr = agent, self.identifier, attr
+            handle.value, handle.wme, handle.removed = value, None, False
             self._children.append(handle)
             agent._input_ops.append(handle)
             return handle

@@ -37,6 +37,8 @@ class Identifier:
 
 Symbol = Identifier | str | int | float
 
+_new = object.__new__
+
 
 class IdentifierFactory:
     """Hands out identifiers named like Soar: the first letter of the attribute that
@@ -55,7 +57,9 @@ class IdentifierFactory:
                 self._letters[hint] = letter
         number = self._counters[letter] + 1
         self._counters[letter] = number
-        return Identifier(letter, number, level)
+        ident = _new(Identifier)  # Identifier.__init__, inline (a class call costs a C frame)
+        ident.letter, ident.number, ident.level = letter, number, level
+        return ident
 
     def reset(self) -> None:
         self._counters.clear()
