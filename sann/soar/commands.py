@@ -310,12 +310,17 @@ def _alias(agent: Agent, args: tuple[str, ...], base: Path) -> None:
 
 
 _MEMORIES = {"rl": "reinforcement learning (RL)", "epmem": "episodic memory (epmem)",
-             "smem": "semantic memory (smem)"}  # fmt: skip
+             "smem": "semantic memory (smem)", "wma": "working-memory activation (wma)",
+             "svs": "the Spatial Visual System (svs)"}  # fmt: skip
+
+#: The parameter that switches each feature on (``--set <parameter> on``).
+_SWITCHES = ("learning", "enabled", "activation")
 
 
 def _memory(name: str) -> Handler:
-    """``rl``, ``epmem`` and ``smem``: this engine has none of them, so only the forms that
-    leave them off are accepted; their other parameters do nothing while they are off."""
+    """``rl``, ``epmem``, ``smem``, ``wma`` and ``svs``: this engine has none of them (all
+    are off by default in the 9.6 kernel), so only the forms that leave them off are
+    accepted; their other parameters do nothing while they are off."""
     feature = _MEMORIES[name]
 
     def handler(agent: Agent, args: tuple[str, ...], base: Path) -> None:
@@ -332,7 +337,7 @@ def _memory(name: str) -> Handler:
                     f"'--disable' are accepted ({feature} is not implemented by this engine)"
                 )
             param, value = items.pop(0), items.pop(0)
-            if param in ("learning", "enabled") and value not in ("off", "0", "false"):
+            if param in _SWITCHES and value not in ("off", "0", "false"):
                 raise SoarRuntimeError(
                     f"{feature} is not implemented by this engine; only "
                     f"'{param} off' is accepted"
@@ -413,6 +418,27 @@ def _stop_phase(agent: Agent, args: tuple[str, ...], base: Path) -> None:
             "apply phase only (the kernel's default)"
         )
     raise SoarRuntimeError(f"unknown phase {' '.join(args)}")
+
+
+def _max_nil_output_cycles(agent: Agent, args: tuple[str, ...], base: Path) -> None:
+    """Accepted so that agent files load: the limit only bounds the kernel's
+    ``run --output`` (run until output), which this engine does not offer."""
+    if len(args) > 1 or (args and _int(args[0]) < 1):
+        raise SoarRuntimeError("max-nil-output-cycles expects one positive integer")
+
+
+def _tcl(agent: Agent, args: tuple[str, ...], base: Path) -> None:
+    """``soar tcl off``: there is no Tcl interpreter here, so only off is accepted."""
+    if _on_off(args, "tcl"):
+        raise SoarRuntimeError("Tcl mode is not available in this engine")
+
+
+def _production(agent: Agent, args: tuple[str, ...], base: Path) -> None:
+    """The umbrella ``production`` command of Soar 9.6: its ``excise`` sub-command."""
+    if not args or args[0] != "excise":
+        what = args[0] if args else "(none)"
+        raise SoarRuntimeError(f"unsupported sub-command {what}: only 'production excise'")
+    _excise(agent, args[1:], base)
 
 
 def _soar(agent: Agent, args: tuple[str, ...], base: Path) -> None:
@@ -603,6 +629,10 @@ HANDLERS: dict[str, Handler] = {
     "rl": _memory("rl"),
     "epmem": _memory("epmem"),
     "smem": _memory("smem"),
+    "wma": _memory("wma"),
+    "svs": _memory("svs"),
+    "max-nil-output-cycles": _max_nil_output_cycles,
+    "production": _production,
     "timers": _timers,
     "warnings": _warnings,
     "waitsnc": _wait_snc,
@@ -626,4 +656,6 @@ _SOAR_SUBCOMMANDS: dict[str, Handler] = {
     "wait-snc": _wait_snc,
     "stop-phase": _stop_phase,
     "timers": _timers,
+    "max-nil-output-cycles": _max_nil_output_cycles,
+    "tcl": _tcl,
 }

@@ -108,6 +108,8 @@ def test_excise_and_init_soar_commands() -> None:
         "timers --off", "timers --on", "timers -d", "soar timers on", "soar timers off",
         "watch --learning print", "trace --learning fullprint", "excise --chunks",
         "excise -c", "soar stop-phase apply", "soar", "alias", "max-gp 5", "soar max-gp 9",
+        "svs --disable", "svs -d", "wma --set activation off", "wma -s activation off",
+        "max-nil-output-cycles 20", "soar max-nil-output-cycles 20", "soar tcl off",
     ],
 )  # fmt: skip
 def test_accepted_no_op_forms(text: str) -> None:
@@ -124,11 +126,23 @@ def test_accepted_no_op_forms(text: str) -> None:
         ("smem -e", "semantic memory"), ("smem --set learning on", "semantic memory"),
         ("smem --add {(<x> ^a b)}", "smem"), ("soar stop-phase output", "apply phase"),
         ("run -e 3", "run"), ("soar version", "sub-command"), ("timers maybe", "on or off"),
+        ("svs --enable", "Spatial Visual System"), ("wma -s activation on", "activation"),
+        ("max-nil-output-cycles 0", "positive integer"), ("soar tcl on", "Tcl"),
+        ("production find r", "production excise"),
     ],
 )  # fmt: skip
 def test_forms_needing_missing_features_are_refused_clearly(text: str, feature: str) -> None:
     with pytest.raises(SoarRuntimeError, match=feature):
         agent_with(text)
+
+
+def test_production_excise_is_excise() -> None:
+    agent, _ = agent_with("sp {r (state <s> ^superstate nil) --> (<s> ^r 1)}\n"
+                          "sp {q (state <s> ^superstate nil) --> (<s> ^q 1)}\n"
+                          "production excise r\n")
+    assert agent.productions == ["q"]
+    agent.load("production excise --all")
+    assert agent.productions == []
 
 
 def test_settings_through_soar_and_aliases() -> None:
