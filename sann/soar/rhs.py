@@ -3,27 +3,50 @@
 Integer operations on integers stay integers; any float makes the result a float; ``/``
 always returns a float; ``div`` and ``mod`` truncate toward zero like C. Floats print as
 C's ``%f`` (``3.500000``), which is what ``write`` and ``concat`` produce in the kernel.
+
+``rand-int`` and ``rand-float`` draw from the agent's one generator, the one indifferent
+selection uses, as the kernel's do: Soar has a single Mersenne Twister for both (measured:
+after ``srand 7`` an indifferent choice takes the first draw and ``(rand-int)`` gets the
+second). `kernel_random` builds the generator in the state ``srand N`` puts the kernel's in;
+the draws are the kernel's (``getrandbits(32)`` is MT19937's 32-bit output), so an agent whose
+generator comes from `kernel_random` gets the kernel's very numbers. ``Agent.srand`` still
+seeds Python's way (``random.Random(N)``, another state): same seed, same numbers, but not the
+kernel's until it uses `kernel_random`.
+
+Which functions may be called where, and with how many arguments, is checked when a rule is
+loaded (`sann.soar.syntax`); the functions still check their arguments, for direct calls.
 """
 
 from __future__ import annotations
 
 import datetime
 import math
-from collections.abc import Callable, Sequence
+import random
+import time
+from collections.abc import Callable, Iterable, Sequence
 from typing import Protocol
 
 from .errors import SoarRuntimeError
-from .memory import Identifier, Symbol
+from .memory import WME, Identifier, Symbol
+
+
+class Seeded(Protocol):
+    """The agent's exploration settings: they hold its seeded generator (``srand``)."""
+
+    rng: random.Random | None
 
 
 class RhsContext(Protocol):
     """What an RHS function may touch in the agent."""
+
+    exploration: Seeded
 
     def write_output(self, text: str) -> None: ...
     def request_halt(self) -> None: ...
     def request_interrupt(self) -> None: ...
     def decision_count(self) -> int: ...
     def gensym(self, prefix: str) -> str: ...
+    def wmes(self) -> Iterable[WME]: ...
 
 
 RhsFunction = Callable[[RhsContext, Sequence[Symbol]], Symbol | None]
@@ -189,11 +212,16 @@ def _round_off(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
 
     A float precision below 0.1 truncates to zero tenths and the kernel returns NaN; we
     round in floating point instead (``(round-off 3.14159 0.01)`` is 3.14)."""
+    return _rounded("round-off", args)
+
+
+def _rounded(name: str, args: Sequence[Symbol]) -> int | float:
+    """`_round_off` under the name of the function that asked (round-off-heading too)."""
     if len(args) != 2:
-        raise SoarRuntimeError("(round-off): needs a number and a precision")
-    value, step = _numbers("round-off", args)
+        raise SoarRuntimeError(f"({name}): needs a number and a precision")
+    value, step = _numbers(name, args)
     if step == 0:
-        raise SoarRuntimeError("(round-off): precision must not be zero")
+        raise SoarRuntimeError(f"({name}): precision must not be zero")
     if isinstance(step, int):
         return _round_int(int(value), step)
     if abs(step) < 1 and int(step * 10) != 0:
@@ -301,6 +329,300 @@ def _atan2(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
     return math.atan2(y, x)
 
 
+# ------------------------------------------------------------------ random numbers
+
+_MT_SIZE = 624
+_WORD = 0xFFFFFFFF
+
+
+def kernel_random(seed: int) -> random.Random:
+    """A generator in the state ``srand seed`` leaves the kernel's in, so that it draws the
+    kernel's very numbers: Soar seeds its Mersenne Twister with MT19937's ``init_genrand``
+    (Python's ``seed`` uses ``init_by_array``, another state), the seed taken modulo 2**32
+    (measured: ``srand -1`` reports seed 4294967295)."""
+    state = [seed & _WORD]
+    for i in range(1, _MT_SIZE):
+        prev = state[-1]
+        state.append((1812433253 * (prev ^ (prev >> 30)) + i) & _WORD)
+    rng = random.Random()
+    rng.setstate((3, (*state, _MT_SIZE), None))  # index 624: the next draw regenerates
+    return rng
+
+
+def _rng(ctx: RhsContext) -> random.Random:
+    """The agent's generator: the one ``srand`` seeds and indifferent selection draws from."""
+    exploration = ctx.exploration
+    if exploration.rng is None:
+        exploration.rng = random.Random(0)
+    return exploration.rng
+
+
+def _c_int64(value: int | float) -> int:
+    """C's ``static_cast<int64_t>``: floats truncate toward zero; NaN, infinities and floats
+    out of range give INT64_MIN, as x86 does."""
+    if type(value) is int:
+        return value
+    if math.isfinite(value) and -(2.0**63) <= value < 2.0**63:
+        return int(value)
+    return -(1 << 63)
+
+
+def _kernel_number(name: str, value: Symbol) -> int | float:
+    """A number argument, with the kernel's complaint for anything else."""
+    if type(value) is int or type(value) is float:
+        return value  # type: ignore[return-value]
+    raise SoarRuntimeError(f"non-number ({format_value(value)}) passed to - {name}")
+
+
+def _rand_int(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    """The kernel's ``rand-int`` (measured): with no argument or one that is not positive, a
+    32-bit random integer; with ``n`` > 0, an integer in [0, n] (n taken modulo 2**32, a
+    float truncated). Arguments after the first are ignored, as in the kernel."""
+    limit = _c_int64(_kernel_number("rand-int", args[0])) if args else 0
+    rng = _rng(ctx)
+    if limit <= 0:
+        return rng.getrandbits(32)
+    return _rand_up_to(rng, limit & _WORD)
+
+
+def _rand_up_to(rng: random.Random, limit: int) -> int:
+    """MTRand's ``randInt(n)``: draws masked to n's bit length until one is at most n."""
+    mask = limit
+    for shift in (1, 2, 4, 8, 16):
+        mask |= mask >> shift
+    while True:
+        draw = rng.getrandbits(32) & mask
+        if draw <= limit:
+            return draw
+
+
+def _rand_float(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    """The kernel's ``rand-float`` (measured): a draw over 2**32 - 1, in [0, 1], scaled by the
+    argument when it is positive; arguments after the first are ignored."""
+    scale = float(_kernel_number("rand-float", args[0])) if args else 0.0
+    fraction = _rng(ctx).getrandbits(32) * (1.0 / 4294967295.0)
+    return fraction * scale if scale > 0 else fraction
+
+
+# ----------------------------------------------------------------------- symbols
+
+
+def _capitalize_symbol(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    """The first character upper-cased, in the C locale: ``|éa|`` stays as it is."""
+    value = _one("capitalize-symbol", args)
+    if type(value) is not str:
+        raise SoarRuntimeError(
+            f"non-symbol ({format_value(value)}) passed to capitalize-symbol function."
+        )
+    if value and "a" <= value[0] <= "z":
+        return value[0].upper() + value[1:]
+    return value
+
+
+def _string(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    """Any symbol as a string; a float with 17 decimals, as the kernel writes it
+    (``(string 0.1)`` is ``0.10000000000000001``), not as ``write`` does."""
+    value = _one("string", args)
+    if type(value) is float:
+        return f"{value:.17f}"
+    return format_value(value)
+
+
+# ---------------------------------------------------------------- working memory
+
+#: Augmentations the kernel's architecture puts on a state outside its slots: ``size`` and
+#: ``set-count`` do not see them (measured: ``(size <s>)`` on the top state is 3, its
+#: ``^reward-link``, ``^epmem`` and ``^smem``, which the memory modules make in slots).
+_GOAL_ATTRIBUTES = frozenset(
+    {
+        "type", "superstate", "attribute", "impasse", "choices", "quiescence",
+        "item", "item-count", "non-numeric", "non-numeric-count",
+    }
+)  # fmt: skip
+
+
+def _slot_index(ctx: RhsContext) -> dict[Identifier, list[WME]]:
+    """Each identifier's WMEs as the kernel's slots hold them: no acceptable operator
+    preferences, no goal or impasse augmentations, nothing of the io link or of input
+    (measured: ``size`` and ``set-count`` give 0 on the input-link whatever it holds).
+
+    Rule-made WMEs with a goal attribute on a state, or inside the input-link, are left out
+    too: our public view of working memory does not tell who made a WME."""
+    index: dict[Identifier, list[WME]] = {}
+    io_links: list[Symbol] = []
+    for wme in ctx.wmes():
+        ident = wme.id
+        if wme.acceptable:
+            continue
+        if ident.level is not None:
+            if wme.attr in _GOAL_ATTRIBUTES:
+                continue
+            if wme.attr == "io" and ident.level == 1:
+                io_links.append(wme.value)
+                continue
+        index.setdefault(ident, []).append(wme)
+    for ident in _input_side(index, io_links):
+        index.pop(ident, None)
+    return index
+
+
+def _input_side(index: dict[Identifier, list[WME]], io_links: list[Symbol]) -> set[Symbol]:
+    """The io identifiers and everything reachable from their input-links."""
+    side = set(io_links)
+    todo = [w.value for io in io_links for w in _with_attr(index, io, "input-link")]
+    while todo:
+        ident = todo.pop()
+        if type(ident) is Identifier and ident not in side:
+            side.add(ident)
+            todo.extend(w.value for w in index.get(ident, ()))
+    return side
+
+
+def _size(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    """How many augmentations an identifier has, as the kernel counts them (`_slot_index`)."""
+    value = _one("size", args)
+    if type(value) is not Identifier:
+        raise SoarRuntimeError(f"non-symbol ({format_value(value)}) passed to size function")
+    return len(_slot_index(ctx).get(value, ()))
+
+
+#: What the kernel's ``set-count`` returns for a first argument that is not an identifier:
+#: a symbol whose text includes the vertical bars (measured).
+SET_COUNT_ERROR = "|ERROR: First parameter needs to be an identifier.|"
+
+
+def _set_count(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    """``(set-count <id> a b ...)``: how many WMEs the path ``<id>.a.b...`` reaches, a WME
+    counted once per path to it; with no attribute, 0 (all measured). Without arguments the
+    kernel crashes; we answer as for a non-identifier."""
+    if not args or type(args[0]) is not Identifier:
+        return SET_COUNT_ERROR
+    if len(args) == 1:
+        return 0
+    index = _slot_index(ctx)
+    reached: list[Symbol] = [args[0]]
+    count = 0
+    for attr in args[1:]:
+        found = [w for ident in reached for w in _with_attr(index, ident, attr)]
+        count = len(found)
+        reached = [w.value for w in found]
+    return count
+
+
+def _with_attr(index: dict[Identifier, list[WME]], ident: Symbol, attr: Symbol) -> list[WME]:
+    if type(ident) is not Identifier:
+        return []
+    return [w for w in index.get(ident, ()) if type(w.attr) is type(attr) and w.attr == attr]
+
+
+# ---------------------------------------------------------------------- headings
+
+#: The kernel's value of pi for headings: with ``math.pi``, 32 of 316 measured headings
+#: differ; with 3.14159 none do (``(compute-heading 0 0 1 1)`` is 44).
+_HEADING_PI = 3.14159
+
+
+def _coordinates(name: str, args: Sequence[Symbol]) -> list[int | float]:
+    if len(args) != 4:
+        raise SoarRuntimeError(f"'{name}' takes exactly 4 arguments.")
+    return [_kernel_number(name, a) for a in args]
+
+
+def _compute_heading(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    """Degrees clockwise from +y of the way from (x1, y1) to (x2, y2), in (-180, 180],
+    truncated; the coordinates are truncated to integers first (all as the kernel does:
+    ``(compute-heading 3 -0.5 2 1)`` is -45, ``(compute-heading 0 0 0 -1)`` is -179)."""
+    x1, y1, x2, y2 = (_c_int64(v) for v in _coordinates("compute-heading", args))
+    heading = math.atan2(y2 - y1, x2 - x1) - _HEADING_PI / 2
+    if heading < 0.0:
+        heading += 2 * _HEADING_PI
+    heading = 2 * _HEADING_PI - heading
+    if heading > _HEADING_PI:
+        heading -= 2 * _HEADING_PI
+    return _c_int64(heading * 180 / _HEADING_PI)
+
+
+def _compute_range(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    """The distance from (x1, y1) to (x2, y2), in floating point, truncated to an integer."""
+    x1, y1, x2, y2 = (float(v) for v in _coordinates("compute-range", args))
+    dx, dy = x2 - x1, y2 - y1
+    return _c_int64(math.sqrt(dx * dx + dy * dy))
+
+
+def _round_off_heading(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    """``round-off``, then brought into (-180, 180] (measured: ``(round-off-heading 175 10)``
+    is 180, ``(round-off-heading -175 10)`` 180, ``(round-off-heading 185 10)`` -170). The
+    kernel crashes on a zero integer precision; we report it as ``round-off`` does."""
+    return _heading_range(_rounded("round-off-heading", args))
+
+
+def _heading_range(value: int | float) -> int | float:
+    """The kernel's loops ``while h > 180: h -= 360``, ``while h <= -180: h += 360``, with one
+    exact remainder (a loop would take forever on 1e18); a multiple of 360 ends as +0."""
+    if -180 < value <= 180:
+        return value
+    if type(value) is float:
+        rest: int | float = math.fmod(value, 360.0) + 0.0  # + 0.0 turns -0.0 into 0.0
+    else:
+        rest = value % 360  # exact for integers of any size
+    if rest > 180:
+        return rest - 360
+    if rest <= -180:
+        return rest + 360
+    return rest
+
+
+# --------------------------------------------------------------- stand-alone actions
+
+
+def _learning(name: str) -> RhsFunction:
+    """``dont-learn``/``force-learn``: the kernel checks the state and, learning off as it
+    always is here, does nothing else (measured: no output)."""
+
+    def call(ctx: RhsContext, args: Sequence[Symbol]) -> None:
+        state = _one(name, args)
+        if type(state) is not Identifier:
+            raise SoarRuntimeError(
+                f"non-identifier ({format_value(state)}) passed to {name} function."
+            )
+        if not state.is_state:
+            raise SoarRuntimeError(f"identifier passed to {name} is not a state: {state}.")
+        return None
+
+    return call
+
+
+_LOG_CHANNELS = 100
+
+
+def _log(ctx: RhsContext, args: Sequence[Symbol]) -> None:
+    """``(log <channel> text...)``: the text, as ``write`` prints it, on the agent's output;
+    the channel must be an integer from 1 to 100 (measured, message included)."""
+    channel = args[0] if args else None
+    if type(channel) is not int or not 1 <= channel <= _LOG_CHANNELS:
+        shown = "(none)" if channel is None else format_value(channel)
+        raise SoarRuntimeError(
+            "First argument of agent's (log) rhs-function must be an integer channel number"
+            f" between 1 and {_LOG_CHANNELS}.  {shown} is invalid."
+        )
+    ctx.write_output("".join(format_value(a) for a in args[1:]))
+    return None
+
+
+def _count(ctx: RhsContext, args: Sequence[Symbol]) -> None:
+    """The kernel's ``count`` changes nothing one can see, in output or memory (measured)."""
+    return None
+
+
+def _wait(ctx: RhsContext, args: Sequence[Symbol]) -> None:
+    """``(wait <ms>)`` sleeps that many milliseconds; any other argument, a float included,
+    is ignored (measured: ``(wait 1500)`` takes 1.5 s, ``(wait 1000.0)`` no time)."""
+    delay = _one("wait", args)
+    if type(delay) is int and delay > 0:
+        time.sleep(delay / 1000)
+    return None
+
+
 FUNCTIONS: dict[str, RhsFunction] = {
     "+": _plus,
     "-": _minus,
@@ -329,4 +651,18 @@ FUNCTIONS: dict[str, RhsFunction] = {
     "ifeq": _ifeq,
     "trim": _trim,
     "strlen": _strlen,
+    "rand-int": _rand_int,
+    "rand-float": _rand_float,
+    "capitalize-symbol": _capitalize_symbol,
+    "string": _string,
+    "size": _size,
+    "set-count": _set_count,
+    "compute-heading": _compute_heading,
+    "compute-range": _compute_range,
+    "round-off-heading": _round_off_heading,
+    "dont-learn": _learning("dont-learn"),
+    "force-learn": _learning("force-learn"),
+    "log": _log,
+    "count": _count,
+    "wait": _wait,
 }

@@ -18,9 +18,11 @@ what a grammar cannot say:
   preferences other than ``+``/``-`` off ``^operator`` are dropped with a `SoarWarning`;
 - the checks the kernel makes when it loads a production: ``(state <s>)`` with no attribute
   test, RHS actions whose identifier is not grounded, unbound function arguments, binary
-  preferences off ``^operator``, numbers out of range — plus our own refusal of unknown RHS
-  functions (the kernel would turn them into ``exec``), of ``exec``/``cmd`` and of Soar-RL
-  ``:template`` rules;
+  preferences off ``^operator``, numbers out of range, RHS functions called where they may
+  not be (a value-only function as a stand-alone action or the reverse) or with the wrong
+  number of arguments — plus our own refusal of unknown RHS functions (the kernel would turn
+  them into ``exec``), of ``exec``/``cmd``, ``accept``, ``link-stm-to-ltm`` and ``deep-copy``
+  (see `REFUSED_RHS_FUNCTIONS`) and of Soar-RL ``:template`` rules;
 - the translation of Lark's exceptions into `SoarSyntaxError` with file, line, column,
   the source line and the expected tokens in words. No Lark exception escapes `parse`.
 
@@ -77,6 +79,9 @@ __all__ = [
     "GRAMMAR_PATH",
     "KNOWN_RHS_FUNCTIONS",
     "REFUSED_RHS_FUNCTIONS",
+    "STAND_ALONE_RHS_FUNCTIONS",
+    "VALUE_RHS_FUNCTIONS",
+    "RhsNames",
     "parse",
     "parse_file",
     "parse_partial",
@@ -85,8 +90,16 @@ __all__ = [
 
 GRAMMAR_PATH = Path(__file__).resolve().parents[2] / "grammars" / "soar.lark"
 
-#: The right-hand-side functions a production may call (the agent's rhs.py implements them).
-KNOWN_RHS_FUNCTIONS: frozenset[str] = frozenset(
+
+class RhsNames(frozenset[str]):
+    """RHS function names without the kernel's rules for calling them: a parse given these
+    checks only that each called function exists, not where it is called nor with how many
+    arguments. Any other collection of names gets the kernel's checks (see `parse`)."""
+
+
+#: The right-hand-side functions a production may call when text is parsed without an engine
+#: (a subset of what the agent's rhs.py implements; the agent passes its own).
+KNOWN_RHS_FUNCTIONS: RhsNames = RhsNames(
     {
         "write", "crlf", "halt", "interrupt",
         "+", "-", "*", "/", "div", "mod", "abs", "int", "float",
@@ -94,10 +107,43 @@ KNOWN_RHS_FUNCTIONS: frozenset[str] = frozenset(
     }
 )  # fmt: skip
 
-#: Functions that would run shell commands or interpreter code: never allowed in a rule file.
-REFUSED_RHS_FUNCTIONS: frozenset[str] = frozenset({"exec", "cmd"})
+#: The kernel's functions that only make a value, with the number of arguments each takes
+#: (None: any number). Measured in soar_sml 9.6: as a stand-alone action each is refused
+#: with "Function X cannot be used as a stand-alone action", a wrong count with "Wrong
+#: number of arguments to function X (expected N)".
+VALUE_RHS_FUNCTIONS: dict[str, int | None] = {
+    "+": None, "-": None, "*": None, "/": None, "div": 2, "mod": 2, "abs": 1, "int": 1,
+    "float": 1, "sqrt": 1, "sin": 1, "cos": 1, "atan2": 2, "min": None, "max": None,
+    "round-off": 2, "concat": None, "make-constant-symbol": None, "timestamp": 0, "crlf": 0,
+    "dc": 0, "ifeq": 4, "trim": 1, "strlen": 1, "rand-int": None, "rand-float": None,
+    "capitalize-symbol": 1, "string": 1, "size": 1, "deep-copy": 1, "compute-heading": 4,
+    "compute-range": 4, "round-off-heading": 2, "accept": 0, "set-count": None,
+}  # fmt: skip
 
-_REFUSAL = "a rule file never runs shell commands or Python"
+#: The kernel's functions that may only be stand-alone actions ("Function X can only be
+#: used as a stand-alone action" inside a value), with their numbers of arguments.
+STAND_ALONE_RHS_FUNCTIONS: dict[str, int | None] = {
+    "write": None, "halt": 0, "interrupt": 0, "dont-learn": 1, "force-learn": 1,
+    "log": None, "link-stm-to-ltm": 2, "count": None, "wait": 1,
+}  # fmt: skip
+
+_SHELL = "a rule file never runs shell commands or Python"
+
+#: Kernel functions a rule file may not call here, and why.
+_REFUSALS: dict[str, str] = {
+    "exec": _SHELL,
+    "cmd": _SHELL,
+    "accept": "it reads a line from standard input, and a rule file never waits for input",
+    "link-stm-to-ltm": "semantic memory is not part of this engine",
+    "deep-copy": (
+        "its copy has to be made of preferences of the firing rule, and this engine's RHS "
+        "functions cannot make preferences"
+    ),
+}
+
+#: Functions that would run shell commands or read input, or that this engine lacks the
+#: memories for: never allowed in a rule file.
+REFUSED_RHS_FUNCTIONS: frozenset[str] = frozenset(_REFUSALS)
 
 # Fresh variables get a temporary name no user variable can have (NUL is not a constituent
 # character) and are renamed to the kernel's `<a*1>` names once the whole production is known,
@@ -260,7 +306,7 @@ class _ToDataclasses(Transformer):
 
     def shell_command(self, items: list) -> None:
         name = items[0]
-        raise self._syntax_error(f"'{name}' is refused: {_REFUSAL}", name.line, name.column)
+        raise self._syntax_error(f"'{name}' is refused: {_SHELL}", name.line, name.column)
 
     def braced(self, items: list) -> str:
         """A {braced} argument is its text between the braces, verbatim (as in Soar's CLI)."""
@@ -635,27 +681,56 @@ def _check_production(production: Production, functions: Collection[str]) -> Non
             "part of this engine",
             production.location,
         )
+    checked = not isinstance(functions, RhsNames)
     for action in production.actions:
+        stand_alone = action.call if isinstance(action, CallAction) else None
         for call in _calls(action):
             _check_function(production, call, functions)
+            if checked:
+                _check_signature(production, call, call is stand_alone)
+            _check_refusal(production, call)
     _check_grounded(production)
     _check_binary_preferences(production)
 
 
 def _check_function(production: Production, call: FuncCall, functions: Collection[str]) -> None:
-    if call.name in REFUSED_RHS_FUNCTIONS:
-        raise SoarSemanticError(
-            production.name,
-            f"RHS function '{call.name}' is refused: {_REFUSAL}",
-            production.location,
-        )
-    if call.name not in functions:
+    if call.name not in functions and call.name not in _REFUSALS:
         known = " ".join(sorted(functions))
         raise SoarSemanticError(
             production.name,
             f"unknown RHS function '{call.name}' (known functions: {known})",
             production.location,
         )
+
+
+def _check_refusal(production: Production, call: FuncCall) -> None:
+    reason = _REFUSALS.get(call.name)
+    if reason is not None:
+        _refuse_call(production, f"RHS function '{call.name}' is refused: {reason}")
+
+
+def _check_signature(production: Production, call: FuncCall, stand_alone: bool) -> None:
+    """The kernel's checks, in its order: where the function is called, then how many
+    arguments it has. Functions the kernel does not know are not checked."""
+    name = call.name
+    if name in STAND_ALONE_RHS_FUNCTIONS:
+        expected = STAND_ALONE_RHS_FUNCTIONS[name]
+        if not stand_alone:
+            _refuse_call(production, f"Function {name} can only be used as a stand-alone action")
+    elif name in VALUE_RHS_FUNCTIONS:
+        expected = VALUE_RHS_FUNCTIONS[name]
+        if stand_alone:
+            _refuse_call(production, f"Function {name} cannot be used as a stand-alone action")
+    else:
+        return
+    if expected is not None and len(call.args) != expected:
+        _refuse_call(
+            production, f"Wrong number of arguments to function {name} (expected {expected})"
+        )
+
+
+def _refuse_call(production: Production, message: str) -> None:
+    raise SoarSemanticError(production.name, message, production.location)
 
 
 def _lhs_bound(elements: tuple[ConditionElement, ...]) -> set[str]:
@@ -831,7 +906,9 @@ def parse(
 ) -> list[Production | Command]:
     """Parse a rule file: its productions and commands in file order.
 
-    ``functions`` is the set of RHS function names a production may call. Raises
+    ``functions`` is the set of RHS function names a production may call. Unless it is an
+    `RhsNames` (as the default is), each call of a function the kernel knows is also checked
+    as the kernel checks it: stand-alone or value, and the number of arguments. Raises
     SoarSyntaxError (with file, line, column) or SoarSemanticError (naming the production);
     the first error stops the parse, as in the kernel.
     """
@@ -854,7 +931,7 @@ def parse_partial(
     parser, transformer = _parser()
     if text.startswith("\ufeff"):  # a byte-order mark: white space, so columns stay right
         text = " " + text[1:]
-    key = (text, file, frozenset(functions))
+    key = (text, file, frozenset(functions), isinstance(functions, RhsNames))
     with _LOCK:
         done = _PARSED.get(key)
         if done is not None:
@@ -882,11 +959,11 @@ def parse_partial(
 
 # Parsed texts (productions and commands are frozen dataclasses, so agents can share them):
 # re-sourcing an unchanged file, as a notebook re-run does, skips the parser.
-_PARSED: dict[tuple[str, str, frozenset[str]], tuple[Production | Command, ...]] = {}
+_PARSED: dict[tuple[str, str, frozenset[str], bool], tuple[Production | Command, ...]] = {}
 _PARSED_LIMIT = 256
 
 
-def _remember(key: tuple[str, str, frozenset[str]], items: tuple) -> None:
+def _remember(key: tuple[str, str, frozenset[str], bool], items: tuple) -> None:
     if len(_PARSED) >= _PARSED_LIMIT:
         del _PARSED[next(iter(_PARSED))]  # the oldest
     _PARSED[key] = items
