@@ -473,8 +473,11 @@ class Agent:
         # WME.__init__, inline: CPython 3.11 runs a class's Python __init__ through a C
         # call into a new interpreter frame, and every WME of a run is made here
         wme = _new(WME)
-        wme.id, wme.attr, wme.value, wme.timetag, wme.acceptable = (
-            ident, attr, value, timetag, acceptable)
+        wme.id = ident
+        wme.attr = attr
+        wme.value = value
+        wme.timetag = timetag
+        wme.acceptable = acceptable
         wm = self._wm
         wm[timetag] = wme
         if type(value) is Identifier and value.level is None:
@@ -721,7 +724,7 @@ class Agent:
                 continue
             pending_goal.pop(match, None)
             fired.append(fire(match, info, goal, o_support))
-        self._assert_preferences(fired)
+        self._assert_preferences(fired, o_support)
         return True
 
     def _touches_level(self, match: object, info: ProductionInfo, change_level: int) -> bool:
@@ -922,18 +925,21 @@ class Agent:
                 if bucket is not None and inst in bucket:
                     bucket.remove(inst)
 
-    def _assert_preferences(self, fired: list[Instantiation]) -> None:
+    def _assert_preferences(self, fired: list[Instantiation], o_support: bool) -> None:
         """Let o-supported rejects remove the older preferences for their values, then add
         the new preferences to their slots, both in the kernel's order (a rule may remove
         and re-add the same value in one firing: the new preference survives).  The rejects
         go first, as in the kernel: their slots are then decided last in the working-memory
         phase, after the slots that gained preferences (it matters when the removal takes
-        a substate away: what was decided before stays for the phase, measured)."""
+        a substate away: what was decided before stays for the phase, measured).
+        ``o_support``: the wave fired o-assertions (an i-assertion wave makes no o-supported
+        preference; a justification may)."""
         justifications, self._new_justifications = self._new_justifications, []
         insts = [*justifications, *reversed(fired)] if justifications else fired[::-1]
         tracing = self.trace_level >= 5
         o_rejects = [pref for inst in insts for pref in reversed(inst.prefs)
-                     if pref.o_supported and pref.type == REJECT]
+                     if pref.o_supported and pref.type == REJECT
+                     ] if o_support or justifications else ()
         for pref in o_rejects:
             if tracing:
                 self._emit("\n+" + trace_preference(pref))
@@ -1126,6 +1132,10 @@ class Agent:
         """Make the WMEs the slot diffs decided on: ``(slot, value key, value)``; the diff
         already entered the key in ``slot.wmes``, without its WME."""
         add_wme = self._add_wme
+        if self._top.sub is None:  # no substate: no WME to remember the source of
+            for slot, key, value in adds:
+                slot.wmes[key] = add_wme(slot.id, slot.attr, value)
+            return
         levels = self._level
         for slot, key, value in adds:
             ident = slot.id
