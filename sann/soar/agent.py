@@ -50,7 +50,7 @@ from .production import (
     same_production,
 )
 from .rete import negation_matches
-from .rhs import FUNCTIONS, format_value
+from .rhs import FUNCTIONS, format_value, kernel_random
 from .trace import print_identifier, trace_preference, trace_wme
 
 PHASES = ("input", "propose", "decide", "apply", "output")
@@ -142,10 +142,10 @@ class Agent:
         return self._phase
 
     def srand(self, seed: int | None) -> None:
-        """Seed the generator of indifferent choices (``srand``); ``None`` means seed 0."""
-        import random
-
-        self.exploration.rng = random.Random(0 if seed is None else seed)
+        """Seed the generator of indifferent choices and of ``rand-int``/``rand-float``
+        (``srand``); ``None`` means seed 0.  The state is the kernel's after the same
+        ``srand``, so the random functions draw its very numbers."""
+        self.exploration.rng = kernel_random(0 if seed is None else seed)
 
     def trace(self, level: int) -> None:
         """0 none, 1 decisions, 2 phases, 3 firings, 4 WM changes, 5 preferences."""

@@ -8,10 +8,9 @@ C's ``%f`` (``3.500000``), which is what ``write`` and ``concat`` produce in the
 selection uses, as the kernel's do: Soar has a single Mersenne Twister for both (measured:
 after ``srand 7`` an indifferent choice takes the first draw and ``(rand-int)`` gets the
 second). `kernel_random` builds the generator in the state ``srand N`` puts the kernel's in;
-the draws are the kernel's (``getrandbits(32)`` is MT19937's 32-bit output), so an agent whose
-generator comes from `kernel_random` gets the kernel's very numbers. ``Agent.srand`` still
-seeds Python's way (``random.Random(N)``, another state): same seed, same numbers, but not the
-kernel's until it uses `kernel_random`.
+the draws are the kernel's (``getrandbits(32)`` is MT19937's 32-bit output), and
+``Agent.srand`` uses it: after the same ``srand`` the random functions give the kernel's very
+numbers (until an indifferent choice, whose draws follow our own selection code).
 
 Which functions may be called where, and with how many arguments, is checked when a rule is
 loaded (`sann.soar.syntax`); the functions still check their arguments, for direct calls.

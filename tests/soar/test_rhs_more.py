@@ -54,7 +54,7 @@ def run(text: str, decisions: int = 1, seed: int | None = None) -> tuple[Agent, 
     agent = Agent(out=out)
     agent.load(text)
     if seed is not None:
-        agent.exploration.rng = kernel_random(seed)
+        agent.srand(seed)
     agent.run(decisions)
     return agent, out.getvalue()
 
@@ -448,8 +448,8 @@ def test_new_functions_agree_with_the_kernel(kernel, tmp_path: Path) -> None:
 
 
 def test_random_numbers_agree_with_the_kernel_after_srand_7(kernel) -> None:
-    """The kernel's ``srand 7``; our agent's generator put in the state `kernel_random` gives
-    (Agent.srand seeds Python's way: see the module docstring of rhs.py)."""
+    """The same file, ``srand 7`` included, in the kernel and in our agent: the same numbers
+    (Agent.srand puts the generator in the kernel's state, see `kernel_random`)."""
     with kernel.KernelAgent() as ka:
         for line in RANDOM_AGENT.strip().split("\n", 1):
             ka.cmd(line)
@@ -458,7 +458,7 @@ def test_random_numbers_agree_with_the_kernel_after_srand_7(kernel) -> None:
         written, _ = ka.take_log().split("\n", 1)
         wmes = kernel.parse_internal(ka.cmd("print --internal s1"))
     theirs = sorted((attr[1], value) for _, attr, value, _ in wmes if len(attr[1]) == 1)
-    agent, out = run(RANDOM_AGENT, seed=7)
+    agent, out = run(RANDOM_AGENT)
     ours = sorted((w.attr, kernel._our_symbol(w.value)) for w in agent.wmes() if len(w.attr) == 1)
     assert out.split("\n")[0] == written
     assert [(a, _rounded(v)) for a, v in ours] == [(a, _rounded(v)) for a, v in theirs]
