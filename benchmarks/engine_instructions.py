@@ -12,8 +12,12 @@ running each workload at two sizes and keeping the difference: Towers of Hanoi w
 disks (the 512 extra moves; with fewer disks the difference would hold the compiling of the
 rules' actions, which happens at their 100th firing, see ``COMPILE_AFTER``), and the block
 planner of engine.py with 160 warm-up scenes plus ``--scenes`` or twice as many.
-``--root`` measures another work tree of the project (an A/B comparison: run it once per
-tree).  Needs Debian's ``valgrind``; about four minutes.
+The same workloads run in the Soar kernel (soar_sml, driven as engine.py drives it), so the
+ratio ours/kernel is printed too: a figure free of the machine's noise, though not of time's
+other costs (Python's instructions miss the caches more often than the kernel's: engine.py's
+time ratios run above these).  ``--root`` measures another work tree of the project (an A/B
+comparison: run it once per tree).  Needs Debian's ``valgrind``; about four minutes on two
+cores.
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ import re
 import shutil
 import subprocess
 import sys
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -44,7 +49,10 @@ def work(root: Path, kind: str, size: int) -> None:
         agent.input_link.add("disks", size)
         agent.run()
         return
-    planner = engine.OurPlanner()
+    if kind == "kernel-hanoi":
+        engine.kernel_hanoi(size)
+        return
+    planner = engine.KernelPlanner() if kind == "kernel-blocks" else engine.OurPlanner()
     for scene in engine.make_scenes(WARM_UP + size, 26, 0):
         planner.solve(scene)
 
@@ -73,13 +81,25 @@ def main(argv: list[str] | None = None) -> int:
     if shutil.which("valgrind") is None:
         parser.error("valgrind is not installed (Debian: apt-get install valgrind)")
     root = args.root.resolve()
-    hanoi = instructions(root, "hanoi", 10) - instructions(root, "hanoi", 9)
-    scenes = (instructions(root, "blocks", 2 * args.scenes)
-              - instructions(root, "blocks", args.scenes))
+    runs = [(prefix + kind, size) for prefix in ("", "kernel-")
+            for kind, sizes in (("hanoi", (9, 10)), ("blocks", (args.scenes, 2 * args.scenes)))
+            for size in sizes]
+    with ThreadPoolExecutor(os.cpu_count() or 1) as pool:  # counts do not depend on load
+        counted = dict(zip(runs, pool.map(lambda run: instructions(root, *run), runs),
+                           strict=True))
+
+    def per_unit(kind: str, sizes: tuple[int, int], units: int) -> float:
+        return (counted[(kind, sizes[1])] - counted[(kind, sizes[0])]) / units
+
     decisions = 2 ** 10 - 2 ** 9 + 1  # one decision per move, plus one disk laid down
-    print(f"{root}:")
-    print(f"  hanoi:  {hanoi / decisions:,.0f} instructions per decision (9 -> 10 disks)")
-    print(f"  blocks: {scenes / args.scenes:,.0f} instructions per scene ({args.scenes} scenes)")
+    print(f"{root}:  ours / Soar kernel (soar_sml, through its bindings)")
+    for label, kind, sizes, units, unit in (
+            ("hanoi", "hanoi", (9, 10), decisions, "decision (9 -> 10 disks)"),
+            ("blocks", "blocks", (args.scenes, 2 * args.scenes), args.scenes,
+             f"scene ({args.scenes} scenes)")):
+        ours, theirs = per_unit(kind, sizes, units), per_unit("kernel-" + kind, sizes, units)
+        print(f"  {label + ':':8s}{ours:13,.0f} / {theirs:11,.0f} instructions per {unit}"
+              f" = {ours / theirs:5.2f}x")
     return 0
 
 
