@@ -877,6 +877,7 @@ class Agent:
         )
         bindings = match.bindings  # type: ignore[attr-defined]
         program = info.program
+        self.firing = inst  # for deep-copy, which may replace it by its waiting copies
         if program is not None:
             program(self, bindings, inst, o_support, operators)
         else:
@@ -884,6 +885,8 @@ class Agent:
             if info.runs >= COMPILE_AFTER:
                 info.program = compile_actions(name, info.actions, frozenset(bindings))
             interpret_actions(info.actions, self, bindings, inst, o_support, operators)
+        if self.firing is not inst:
+            self.firing.settle()  # type: ignore[attr-defined]
         if goal.level > 1:
             goal.insts[inst] = None
             self._handle_substate_preferences(inst)

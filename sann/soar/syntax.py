@@ -21,7 +21,7 @@ what a grammar cannot say:
   preferences off ``^operator``, numbers out of range, RHS functions called where they may
   not be (a value-only function as a stand-alone action or the reverse) or with the wrong
   number of arguments — plus our own refusal of unknown RHS functions (the kernel would turn
-  them into ``exec``), of ``exec``/``cmd``, ``accept``, ``link-stm-to-ltm`` and ``deep-copy``
+  them into ``exec``), of ``exec``/``cmd``, ``accept`` and ``link-stm-to-ltm``
   (see `REFUSED_RHS_FUNCTIONS`) and of Soar-RL ``:template`` rules;
 - the translation of Lark's exceptions into `SoarSyntaxError` with file, line, column,
   the source line and the expected tokens in words. No Lark exception escapes `parse`.
@@ -135,10 +135,6 @@ _REFUSALS: dict[str, str] = {
     "cmd": _SHELL,
     "accept": "it reads a line from standard input, and a rule file never waits for input",
     "link-stm-to-ltm": "semantic memory is not part of this engine",
-    "deep-copy": (
-        "its copy has to be made of preferences of the firing rule, and this engine's RHS "
-        "functions cannot make preferences"
-    ),
 }
 
 #: Functions that would run shell commands or read input, or that this engine lacks the

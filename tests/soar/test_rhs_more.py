@@ -382,7 +382,6 @@ def test_load_refuses_calls_as_the_kernel_does(action: str, message: str) -> Non
 @pytest.mark.parametrize(
     ("action", "reason"),
     [("(<s> ^v (accept))", "standard input"),
-     ("(<s> ^v (deep-copy <s>))", "preferences of the firing rule"),
      ("(link-stm-to-ltm <s> 5)", "semantic memory")],
 )  # fmt: skip
 def test_functions_this_engine_cannot_honour_are_refused_at_load(action: str, reason: str) -> None:
