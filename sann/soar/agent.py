@@ -385,6 +385,8 @@ class Agent:
         self._level: dict[Identifier, int] = {}
         self._goals: dict[Identifier, Goal] = {}
         self._inst_of: dict[object, Instantiation] = {}
+        # The instantiation being fired, for deep-copy (which puts its waiting copies here).
+        self.firing: object = None
         self._pending_goal: dict[object, Goal] = {}
         self._nil_retractions: list[Instantiation] = []
         self._changed: list[Slot] = []
