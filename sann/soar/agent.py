@@ -318,7 +318,9 @@ class Agent:
     def print(self, identifier: str | Identifier, depth: int = 1) -> str:
         """The kernel's ``print --depth N <id>`` text."""
         ident = self.find_identifier(identifier)
-        return print_identifier(ident, depth, self._augmentations)
+        text = print_identifier(ident, depth, self._augmentations, self._column)
+        self._column = 0  # the kernel's print ends its text with a newline
+        return text
 
     def find_identifier(self, identifier: str | Identifier) -> Identifier:
         if isinstance(identifier, Identifier):
@@ -387,6 +389,8 @@ class Agent:
         self._inst_of: dict[object, Instantiation] = {}
         # The instantiation being fired, for deep-copy (which puts its waiting copies here).
         self.firing: object = None
+        # Characters on the output's current line: the kernel's print wraps by them.
+        self._column = 0
         self._pending_goal: dict[object, Goal] = {}
         self._nil_retractions: list[Instantiation] = []
         self._changed: list[Slot] = []
@@ -1883,11 +1887,12 @@ class Agent:
         if text:
             stream = self.out if self.out is not None else sys.stdout
             stream.write(text)
-            self._line_start = text.endswith("\n")
+            newline = text.rfind("\n")
+            self._column = len(text) - newline - 1 if newline >= 0 else self._column + len(text)
 
     def _emit_line(self, text: str) -> None:
         """Trace text that starts on a fresh line, like the kernel's phase headers."""
-        self._emit(text if getattr(self, "_line_start", True) else "\n" + text)
+        self._emit(text if self._column == 0 else "\n" + text)
 
     def __repr__(self) -> str:
         return f"<Agent {self.name}: {len(self._productions)} productions, {len(self._wm)} wmes>"

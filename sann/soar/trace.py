@@ -2,7 +2,10 @@
 
 ``print --depth N id`` lists the identifier's augmentations sorted by attribute, wrapping
 before column 80 with a 7-space continuation, then the identifiers it links to, depth
-first, indented two spaces per level and each printed once.
+first, indented two spaces per level and each printed once.  The kernel counts columns on
+its output stream, so a print that starts after unfinished trace output (``     1:
+==>S: S2 (state no-change)`` has no newline) wraps its first line that much earlier
+(measured).
 """
 
 from __future__ import annotations
@@ -47,26 +50,31 @@ def _sort_key(wme: WME) -> tuple[str, bool, int]:
     return (symbol_text(wme.attr), wme.acceptable, -wme.timetag)
 
 
-def format_augmentations(ident: Identifier, wmes: list[WME], indent: int) -> str:
-    """One ``(id ^a v ...)`` block with the kernel's line wrapping."""
+def format_augmentations(ident: Identifier, wmes: list[WME], indent: int,
+                         column: int = 0) -> str:
+    """One ``(id ^a v ...)`` block with the kernel's line wrapping; ``column``: where the
+    output stream's current line already is."""
     line = " " * indent + f"({ident.name}"
     lines: list[str] = []
     for wme in sorted(wmes, key=_sort_key):
         item = f" ^{symbol_text(wme.attr)} {symbol_text(wme.value)}"
         if wme.acceptable:
             item += " +"
-        if len(line) + len(item) >= COLUMNS - 1:
+        if column + len(line) + len(item) >= COLUMNS - 1:
             lines.append(line)
             line = " " * (indent + 6)
+            column = 0
         line += item
     lines.append(line + ")")
     return "\n".join(lines)
 
 
 def print_identifier(
-    ident: Identifier, depth: int, augmentations: Callable[[Identifier], list[WME]]
+    ident: Identifier, depth: int, augmentations: Callable[[Identifier], list[WME]],
+    column: int = 0,
 ) -> str:
-    """``print --depth depth ident``: the identifier, then linked identifiers depth first."""
+    """``print --depth depth ident``: the identifier, then linked identifiers depth first;
+    ``column``: where the output stream's current line already is."""
     if depth < 1:
         depth = 1
     printed: set[int] = set()
@@ -77,7 +85,7 @@ def print_identifier(
         wmes = augmentations(node)
         if not wmes and level > 0:
             return
-        blocks.append(format_augmentations(node, wmes, 2 * level))
+        blocks.append(format_augmentations(node, wmes, 2 * level, 0 if blocks else column))
         if level + 1 >= depth:
             return
         for wme in sorted(wmes, key=_sort_key):

@@ -292,3 +292,31 @@ def test_generated_substate_agents_agree_with_kernel(seed: int, tmp_path) -> Non
     ours, our_trace = our_run(text, 20)
     assert ours == theirs
     assert _decision_lines(our_trace) == _decision_lines(their_trace)
+
+
+WIDE = (
+    "sp {t (state <s> ^superstate nil) --> (<s> ^x <x>) (<x> ^alpha 1 ^beta 22 ^gamma 333"
+    " ^delta 4444 ^epsilon 55555 ^zeta 666666 ^eta 7777777 ^theta 88888888"
+    " ^iota |a long string value| ^kappa k ^lambda l ^mu m ^nu n ^xi x ^omicron o ^pi p)}"
+)
+
+
+def test_print_wraps_by_the_column_the_trace_left_like_the_kernel() -> None:
+    """The kernel counts columns on its output: after ``run 1`` its trace line has no
+    newline, so the next print wraps its first line earlier; the print after it does not."""
+    kernel = sml.Kernel.CreateKernelInCurrentThread(True, 0)
+    try:
+        theirs_agent = kernel.CreateAgent("wide")
+        kernel.ExecuteCommandLine(WIDE, "wide")
+        kernel.ExecuteCommandLine("run 1", "wide")
+        theirs = [kernel.ExecuteCommandLine("print X1", "wide") for _ in range(2)]
+        kernel.DestroyAgent(theirs_agent)
+    finally:
+        kernel.Shutdown()
+    agent = Agent(out=io.StringIO())
+    agent.trace(1)  # the kernel's default watch level
+    agent.load(WIDE)
+    agent.run(1)
+    ours = [agent.print("X1") for _ in range(2)]
+    assert ours == theirs
+    assert ours[0] != ours[1]  # the wrapping depends on the column, as in the kernel
