@@ -57,6 +57,10 @@ PHASES = ("input", "propose", "decide", "apply", "output")
 
 _new = object.__new__
 
+#: Where a new kernel agent's printer believes its output line to be, and again after
+#: init-soar (measured: its first print wraps as if 17 characters were on the line).
+START_COLUMN = 17
+
 
 def _default_matcher() -> type:
     from .rete import Rete
@@ -279,6 +283,7 @@ class Agent:
             info.firings = 0
         self._release_slots()
         self._build()
+        self._column = START_COLUMN
 
     def _release_slots(self) -> None:
         """Break the cycles of the preferences about to be dropped (a live preference, its
@@ -390,7 +395,7 @@ class Agent:
         # The instantiation being fired, for deep-copy (which puts its waiting copies here).
         self.firing: object = None
         # Characters on the output's current line: the kernel's print wraps by them.
-        self._column = 0
+        self._column = START_COLUMN
         self._pending_goal: dict[object, Goal] = {}
         self._nil_retractions: list[Instantiation] = []
         self._changed: list[Slot] = []

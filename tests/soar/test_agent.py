@@ -63,12 +63,20 @@ def values(agent: Agent, ident: str, attr: str) -> list:
 
 
 def test_top_state_prints_like_the_kernel() -> None:
+    """Texts of soar_sml 9.6: a new agent's printer starts as if 17 characters were on the
+    line, so its first print wraps before ^type; the next starts on a fresh line."""
     agent, _ = make()
-    assert agent.print("S1", 3) == (
-        "(S1 ^epmem E1 ^io I1 ^reward-link R1 ^smem L1 ^superstate nil ^type state)\n"
+    linked = (
         "  (E1 ^command C1 ^present-id 1 ^result R2)\n"
         "  (I1 ^input-link I2 ^output-link I3)\n"
         "  (L1 ^command C2 ^result R3)\n"
+    )
+    assert agent.print("S1", 3) == (
+        "(S1 ^epmem E1 ^io I1 ^reward-link R1 ^smem L1 ^superstate nil\n"
+        "       ^type state)\n" + linked
+    )
+    assert agent.print("S1", 3) == (
+        "(S1 ^epmem E1 ^io I1 ^reward-link R1 ^smem L1 ^superstate nil ^type state)\n" + linked
     )
     assert agent.stats["wm_size"] == 13
     assert [w.timetag for w in agent.wmes()] == list(range(1, 14))

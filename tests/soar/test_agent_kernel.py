@@ -320,3 +320,20 @@ def test_print_wraps_by_the_column_the_trace_left_like_the_kernel() -> None:
     ours = [agent.print("X1") for _ in range(2)]
     assert ours == theirs
     assert ours[0] != ours[1]  # the wrapping depends on the column, as in the kernel
+
+
+@pytest.mark.parametrize("before", [[], ["print s1", "init-soar"], ["print s1"]])
+def test_first_print_of_a_new_or_reinitialised_agent_wraps_like_the_kernel(before) -> None:
+    kernel = sml.Kernel.CreateKernelInCurrentThread(True, 0)
+    try:
+        theirs_agent = kernel.CreateAgent("fresh")
+        for line in before:
+            kernel.ExecuteCommandLine(line, "fresh")
+        theirs = kernel.ExecuteCommandLine("print s1", "fresh")
+        kernel.DestroyAgent(theirs_agent)
+    finally:
+        kernel.Shutdown()
+    agent = Agent(out=io.StringIO())
+    for line in before:
+        agent.load(line)
+    assert agent.print("s1") == theirs
