@@ -38,7 +38,7 @@ from .instantiation import (
 )
 from .io import InputHandle, OutputHandle, WMEHandle
 from .memory import WME, Identifier, IdentifierFactory, Symbol
-from .preferences import ACCEPTABLE, PROHIBIT, REJECT, REQUIRE, Preference, Slot, new_slot
+from .preferences import ACCEPTABLE, PROHIBIT, REJECT, REQUIRE, Preference, Slot
 from .production import (
     Command,
     Condition,
@@ -977,7 +977,7 @@ class Agent:
         key = _vkey(attr)
         slot = slots.get(key)
         if slot is None and create:
-            slot = slots[key] = new_slot(ident, attr, False)
+            slot = slots[key] = Slot(ident, attr, False)
         return slot
 
     def _add_preference(self, pref: Preference) -> None:
@@ -989,7 +989,7 @@ class Agent:
         key = attr if type(attr) is not float else (float, attr)
         slot = slots.get(key)
         if slot is None:
-            slot = slots[key] = new_slot(ident, attr, False)
+            slot = slots[key] = Slot(ident, attr, False)
         # Slot.add, inlined: the kernel puts a new preference at the head of its list.
         bucket = slot.prefs.get(pref.type)
         if bucket is None:

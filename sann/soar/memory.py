@@ -37,8 +37,6 @@ class Identifier:
 
 Symbol = Identifier | str | int | float
 
-_new = object.__new__
-
 
 class IdentifierFactory:
     """Hands out identifiers named like Soar: the first letter of the attribute that
@@ -57,9 +55,7 @@ class IdentifierFactory:
                 self._letters[hint] = letter
         number = self._counters[letter] + 1
         self._counters[letter] = number
-        ident = _new(Identifier)  # Identifier.__init__, inline (a class call costs a C frame)
-        ident.letter, ident.number, ident.level = letter, number, level
-        return ident
+        return Identifier(letter, number, level)
 
     def reset(self) -> None:
         self._counters.clear()

@@ -149,15 +149,3 @@ class Slot:
 
 
 _EMPTY: list[Preference] = []
-
-
-def new_slot(ident: Identifier, attr: Symbol, is_context: bool) -> Slot:
-    """``Slot(ident, attr, is_context)`` for the hot paths: CPython 3.11 runs a class's Python
-    ``__init__`` through a C call into a new interpreter frame; a function call is inlined."""
-    slot = _new(Slot)
-    slot.id, slot.attr, slot.is_context = ident, attr, is_context
-    slot.prefs, slot.wmes, slot.acceptable_wmes, slot.changed = {}, {}, {}, False
-    return slot
-
-
-_new = object.__new__
