@@ -504,6 +504,20 @@ def _print(agent: Agent, args: tuple[str, ...], base: Path) -> None:
             agent._emit(agent.print(name, depth) + "\n")
 
 
+def _matches(agent: Agent, args: tuple[str, ...], base: Path) -> None:
+    """``matches``: the match set, or a production's partial matches (introspect.py)."""
+    from .introspect import matches_text
+
+    agent._emit(matches_text(agent, args))
+
+
+def _preferences(agent: Agent, args: tuple[str, ...], base: Path) -> None:
+    """``preferences``: a slot's preferences, by type, with their support (introspect.py)."""
+    from .introspect import preferences_text
+
+    agent._emit(preferences_text(agent, args))
+
+
 def _gp(
     agent: Agent, args: tuple[str, ...], base: Path, location: SourceLocation | None = None
 ) -> None:
@@ -646,6 +660,8 @@ HANDLERS: dict[str, Handler] = {
     "print": _print,
     "p": _print,
     "gp": _gp,
+    "matches": _matches,
+    "preferences": _preferences,
 }
 
 _SOAR_SUBCOMMANDS: dict[str, Handler] = {
