@@ -118,6 +118,9 @@ VALUE_RHS_FUNCTIONS: dict[str, int | None] = {
     "dc": 0, "ifeq": 4, "trim": 1, "strlen": 1, "rand-int": None, "rand-float": None,
     "capitalize-symbol": 1, "string": 1, "size": 1, "deep-copy": 1, "compute-heading": 4,
     "compute-range": 4, "round-off-heading": 2, "accept": 0, "set-count": None,
+    "sum": 1, "product": 1, "set-sum": None, "set-multiply": None, "set-min": None,
+    "set-max": None, "set-range": None, "set-mean": None, "set-stdev": None, "haversine": 4,
+    "compute-dice-probability": 4, "extrapolate-x-position": 4, "extrapolate-y-position": 4,
 }  # fmt: skip
 
 #: The kernel's functions that may only be stand-alone actions ("Function X can only be
