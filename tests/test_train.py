@@ -2,9 +2,11 @@
 
 import numpy as np
 import pytest
+import torch
+from torch import nn
 
-from sann.nets import ShallowNet
-from sann.train import Standardiser, TrainConfig, intervals_overlap, summarise, train
+from sann.nets import DeepNet, ShallowNet
+from sann.train import Standardiser, TrainConfig, intervals_overlap, summarise, train, train_seeds
 
 
 def _xor_like(n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -39,3 +41,58 @@ def test_summary_interval_contains_the_mean_and_detects_separation():
     assert not intervals_overlap(high, low)
     assert intervals_overlap(high, summarise([0.98, 0.999, 0.99]))
     assert summarise([0.5])["ci95"] == [0.5, 0.5]
+
+
+def _one_net_alone(make, x, y, xv, yv, seed: int, config: TrainConfig) -> tuple[list, list]:
+    """The textbook loop for one net (what `train_seeds` must equal per seed)."""
+    torch.manual_seed(seed)
+    scale = Standardiser.fit(x)
+    xt, yt = torch.from_numpy(scale(x)), torch.from_numpy(y)
+    xe, ye = torch.from_numpy(scale(xv)), torch.from_numpy(yv)
+    model = make(xt.shape[1])
+    optimiser = torch.optim.Adam(model.parameters(), lr=config.lr)
+    order = torch.Generator().manual_seed(seed)
+    losses, errors = [], []
+    for _ in range(config.epochs):
+        total = 0.0
+        for batch in torch.randperm(len(xt), generator=order).split(config.batch_size):
+            optimiser.zero_grad()
+            loss = nn.functional.cross_entropy(model(xt[batch]), yt[batch])
+            loss.backward()
+            optimiser.step()
+            total += loss.item() * len(batch)
+        losses.append(total / len(xt))
+        with torch.no_grad():
+            errors.append((model(xe).argmax(1) != ye).sum().item() / len(ye))
+    return losses, errors
+
+
+@pytest.mark.parametrize("make", [lambda n: ShallowNet(n, hidden=5),
+                                  lambda n: DeepNet(n, hidden=(6, 4))], ids=["shallow", "deep"])
+def test_seeds_trained_together_equal_each_seed_trained_alone(make):
+    x, y = _xor_like(300, 0)
+    xv, yv = _xor_like(100, 1)
+    config = TrainConfig(epochs=6, batch_size=32, lr=0.02)
+    together = train_seeds(make, x, y, xv, yv, [4, 0, 9], config)
+    assert [r.seed for r in together] == [4, 0, 9]
+    for run in together:
+        losses, errors = _one_net_alone(make, x, y, xv, yv, run.seed, config)
+        np.testing.assert_allclose(run.train_loss, losses, rtol=1e-5)
+        assert np.abs(np.array(run.test_error) - errors).max() <= 1 / len(yv)
+        assert run.accuracy == 1 - run.test_error[-1]
+    alone = train(make, x, y, xv, yv, seed=9, config=config)
+    np.testing.assert_allclose(alone.train_loss, together[2].train_loss, rtol=1e-5)
+    with torch.no_grad():
+        probe = torch.from_numpy(together[2].standardiser(xv))
+        np.testing.assert_allclose(together[2].model(probe), alone.model(probe), atol=1e-4)
+
+
+def test_train_seeds_refuses_empty_input():
+    x, y = _xor_like(20, 0)
+    make = lambda n: ShallowNet(n)  # noqa: E731
+    with pytest.raises(ValueError, match="at least one seed"):
+        train_seeds(make, x, y, x, y, [])
+    with pytest.raises(ValueError, match="must not be empty"):
+        train_seeds(make, x[:0], y[:0], x, y, [1])
+    with pytest.raises(ValueError, match="epochs"):
+        train_seeds(make, x, y, x, y, [1], TrainConfig(epochs=0))

@@ -17,7 +17,7 @@ from threadpoolctl import threadpool_limits
 
 from sann.nets import ShallowNet
 from sann.tasks.blocks import make_dataset
-from sann.train import TrainConfig, TrainResult, summarise, train
+from sann.train import TrainConfig, TrainResult, summarise, train_seeds
 from sann.viz import plots
 
 KINDS = ("D1", "D2")
@@ -49,14 +49,19 @@ def with_logical(x: np.ndarray, logical: np.ndarray) -> np.ndarray:
 
 def train_pair(data, config: BlocksExperiment, seed: int) -> dict[str, TrainResult]:
     """Train the standard ANN and SANN on one dataset with one seed."""
+    return train_pairs(data, config, [seed])[0]
+
+
+def train_pairs(data, config: BlocksExperiment, seeds: list[int]) -> list[dict[str, TrainResult]]:
+    """Train the standard ANN and SANN on one dataset with every seed (each net kind's seeds
+    are trained together, see `train_seeds`); one {"ann", "sann"} pair per seed."""
     make = lambda n: ShallowNet(n, hidden=config.hidden)  # noqa: E731
-    return {
-        "ann": train(make, data.X_train, data.y_train, data.X_test, data.y_test, seed,
-                     config.train),
-        "sann": train(make, with_logical(data.X_train, data.logical_train), data.y_train,
-                      with_logical(data.X_test, data.logical_test), data.y_test, seed,
-                      config.train),
-    }
+    ann = train_seeds(make, data.X_train, data.y_train, data.X_test, data.y_test, seeds,
+                      config.train)
+    sann = train_seeds(make, with_logical(data.X_train, data.logical_train), data.y_train,
+                       with_logical(data.X_test, data.logical_test), data.y_test, seeds,
+                       config.train)
+    return [{"ann": a, "sann": b} for a, b in zip(ann, sann, strict=True)]
 
 
 def tsne_layers(data, runs: dict[str, TrainResult], points: int, seed: int) -> dict:
@@ -102,7 +107,7 @@ def run(out: str | Path, config: BlocksExperiment = BlocksExperiment(),
             data = make_dataset(kind, mode, n_train=config.n_train, n_test=config.n_test,
                                 seed=config.data_seed, progress=progress,
                                 workers=None)
-            runs = [train_pair(data, config, seed) for seed in range(config.seeds)]
+            runs = train_pairs(data, config, list(range(config.seeds)))
             results["datasets"].setdefault(kind, {})[mode] = _jsonable(data.meta)
             results["accuracy"].setdefault(kind, {})[mode] = {
                 net: summarise([r[net].accuracy for r in runs]) for net in ("ann", "sann")}

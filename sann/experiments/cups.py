@@ -20,7 +20,7 @@ import numpy as np
 
 from sann.nets import DeepNet
 from sann.tasks.cups import CupsDataParams, CupsDataset, detection_summary, make_dataset
-from sann.train import TrainConfig, TrainResult, intervals_overlap, summarise, train
+from sann.train import TrainConfig, TrainResult, intervals_overlap, summarise, train_seeds
 from sann.viz import plots
 
 NETS = ("dnn", "sann")
@@ -64,16 +64,17 @@ def with_logical(x: np.ndarray, logical: np.ndarray) -> np.ndarray:
     return fuse(x.astype(np.float32), logical.astype(np.float32)).astype(np.float32)
 
 
-def train_pair(data: CupsDataset, config: CupsExperiment, seed: int) -> dict[str, TrainResult]:
-    """Train the DNN and SANN (same deep net, one more input) with one seed."""
+def train_pairs(data: CupsDataset, config: CupsExperiment,
+                seeds: list[int]) -> list[dict[str, TrainResult]]:
+    """Train the DNN and SANN with every seed (each net kind's seeds are trained together,
+    see `train_seeds`); one {"dnn", "sann"} pair per seed."""
     make = lambda n: DeepNet(n, hidden=config.hidden)  # noqa: E731
-    return {
-        "dnn": train(make, data.X_train, data.y_train, data.X_test, data.y_test, seed,
-                     config.train),
-        "sann": train(make, with_logical(data.X_train, data.logical_train), data.y_train,
-                      with_logical(data.X_test, data.logical_test), data.y_test, seed,
-                      config.train),
-    }
+    dnn = train_seeds(make, data.X_train, data.y_train, data.X_test, data.y_test, seeds,
+                      config.train)
+    sann = train_seeds(make, with_logical(data.X_train, data.logical_train), data.y_train,
+                       with_logical(data.X_test, data.logical_test), data.y_test, seeds,
+                       config.train)
+    return [{"dnn": a, "sann": b} for a, b in zip(dnn, sann, strict=True)]
 
 
 def logical_only_accuracy(data: CupsDataset) -> float:
@@ -94,7 +95,7 @@ def run(out: str | Path, config: CupsExperiment = CupsExperiment(),
                         params=config.data, cap=config.cap, progress=progress)
     t_data = time.perf_counter() - t0
     t0 = time.perf_counter()
-    runs = [train_pair(data, config, seed) for seed in range(config.seeds)]
+    runs = train_pairs(data, config, list(range(config.seeds)))
     t_train = time.perf_counter() - t0
     accuracy = {net: summarise([r[net].accuracy for r in runs]) for net in NETS}
     results = {
