@@ -49,7 +49,7 @@ from .production import (
     duplicate_key,
     same_production,
 )
-from .rete import negation_matches
+from .rete import KernelOrder, negation_matches
 from .rhs import FUNCTIONS, format_value, kernel_random
 from .trace import print_identifier, trace_preference, trace_wme
 
@@ -108,6 +108,9 @@ class Agent:
         self.warnings = True
         self._gensym_counter = 0
         self.matcher = self._matcher_class()
+        # the kernel Rete's node tree, for the order it makes matches in (_kernel_key)
+        self._kernel_order = KernelOrder()
+        self._kernel_places: dict[str, dict[int, tuple]] = {}
         self._build()
 
     # ------------------------------------------------------------------ public API
@@ -251,6 +254,8 @@ class Agent:
                 return
         self._by_shape.setdefault(key, []).append(production.name)
         self.matcher.add_production(production)
+        self._kernel_places[production.name] = self._kernel_order.add(production,
+                                                                      self._timetag)
         info = ProductionInfo.of(production)
         self._load_count += 1
         info.load_index = self._load_count
@@ -261,6 +266,8 @@ class Agent:
         if name not in self._productions:
             raise SoarRuntimeError(f"excise: no production named {name}")
         self.matcher.excise(name)
+        self._kernel_order.remove(name)
+        del self._kernel_places[name]
         info = self._productions.pop(name)
         same_shape = self._by_shape[duplicate_key(info.production)]
         same_shape.remove(name)
@@ -279,6 +286,7 @@ class Agent:
         Rete, so re-initialising between problems costs the WMEs, not the rules."""
         self.matcher.clear_wmes()
         self.matcher.take_changes()
+        self._kernel_order.restart()
         for info in self._productions.values():
             info.firings = 0
         self._release_slots()
@@ -777,30 +785,50 @@ class Agent:
         match-set lists."""
         new, gone = self.matcher.take_changes()
         if gone:
-            self._retract_matches(gone)
+            self._retract_matches(gone, self.matcher.blocked_retractions)
         if new:
             if len(new) > 1 and not in_match_order:
-                new = sorted(new, key=self._creation_key)
+                new = sorted(new, key=self._kernel_key)
             self._queue_matches(new)
 
-    def _retract_matches(self, gone: list) -> None:
+    def _retract_matches(self, gone: list, blocked: int = -1) -> None:
         """Schedule the retraction of fired matches that stopped matching, in creation
         order (it decides the order of retraction); unfired ones just leave their queue."""
         inst_of = self._inst_of
         pending_goal = self._pending_goal
         fired: list[Instantiation] = []
-        for match in gone:
+        first_removed = 0  # fired[:first_removed]: blocked by new WMEs (when known)
+        for k, match in enumerate(gone):
             inst = inst_of.pop(match, None)
             if inst is not None:
                 fired.append(inst)
+                if k < blocked:
+                    first_removed += 1
                 continue
             goal = pending_goal.pop(match, None)
             if goal is not None:
                 goal.pending_i.pop(match, None)
                 goal.pending_o.pop(match, None)
         if len(fired) > 1:
-            key = self._creation_key
-            fired.sort(key=lambda inst: key(inst.match))
+            # The kernel's order of queueing them, which it undoes when retracting: first
+            # those a new WME blocked (WMEs are added to the Rete before any is removed),
+            # then those of removed WMEs, the newest match first.
+            if blocked >= 0:
+                made, removed = fired[:first_removed], fired[first_removed:]
+            else:  # those that lost no WME
+                wm = self._wm
+                made, removed = [], []
+                for inst in fired:
+                    for wme in inst.wmes:
+                        if wme is not None and wm.get(wme.timetag) is not wme:
+                            removed.append(inst)
+                            break
+                    else:
+                        made.append(inst)
+            key = self._kernel_key
+            made.sort(key=lambda inst: key(inst.match), reverse=True)
+            removed.sort(key=lambda inst: key(inst.match), reverse=True)
+            fired = made + removed
         for inst in fired:
             self._schedule_retraction(inst)
 
@@ -855,6 +883,38 @@ class Agent:
         if info is None:
             return (newest, 0, 0)
         return (newest, info.cond_masks[index] if index >= 0 else 0, -info.load_index)
+
+    def _kernel_key(self, match: object) -> tuple[int, ...]:
+        """The order the kernel's Rete makes new matches in: by the newest matched WME, then
+        by the alpha memory it entered (``(* ^attr *)`` before ``(* ^attr value)``) and the
+        path from the join it activated down to the production (``KernelOrder``).  A WME
+        matched by several conditions makes the match in the last alpha memory it enters,
+        at the first of them in the kernel's order."""
+        newest, index = match.newest  # type: ignore[attr-defined]
+        name = match.production.name  # type: ignore[attr-defined]
+        places = self._kernel_places.get(name)
+        if places is None or index < 0:
+            return (newest,)
+        place = places.get(index)
+        masks = self._productions[name].cond_masks
+        mask = masks[index]
+        wmes = match.wmes  # type: ignore[attr-defined]
+        wme = wmes[index]
+        for j, other in enumerate(wmes):
+            if other is wme and j != index:
+                other_place = places.get(j)
+                if other_place is not None and (
+                        place is None or masks[j] > mask
+                        or (masks[j] == mask and other_place[0] < place[0])):
+                    mask, place = masks[j], other_place
+        if place is None:
+            return (newest, mask)
+        linked = place[2]  # when its join was made, or relinked (see KernelOrder)
+        for j in place[1]:
+            other = wmes[j]
+            if other is not None and other.timetag > linked:
+                linked = other.timetag
+        return (newest, mask, linked, *place[3])
 
     def _schedule_retraction(self, inst: Instantiation) -> None:
         if inst.retracted:
@@ -1129,6 +1189,8 @@ class Agent:
                 slot.changed = False
                 self._update_acceptable_wmes(slot)
             remove_wme = self._remove_wme
+            if removes:
+                self.matcher.mark_removals()
             for wme in removes:
                 remove_wme(wme)
             if self._pending_gds:

@@ -32,6 +32,7 @@ Matching follows the real Soar 9.6 kernel (checked with ``soar_sml``):
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Iterable, Iterator
 from operator import attrgetter
 
@@ -175,11 +176,20 @@ class _Changes:
     """New and retracted matches since the last ``take_changes``; an appear/retract pair
     inside one interval cancels out."""
 
-    __slots__ = ("added", "removed")
+    __slots__ = ("added", "removed", "mark", "blocked")
 
     def __init__(self) -> None:
         self.added: dict[Match, None] = {}
         self.removed: dict[Match, None] = {}
+        # how many retractions came before the first WME removal (``mark_removals``): the
+        # ones new WMEs made, by blocking a negation; ``blocked`` is it for the last take
+        # (-1: no removal was marked)
+        self.mark = -1
+        self.blocked = -1
+
+    def mark_removals(self) -> None:
+        if self.mark < 0:
+            self.mark = len(self.removed)
 
     def appear(self, match: Match) -> None:
         self.added[match] = None
@@ -191,8 +201,10 @@ class _Changes:
             self.removed[match] = None
 
     def take(self) -> tuple[list[Match], list[Match]]:
+        mark, self.mark = self.mark, -1
         if not self.added and not self.removed:
             return [], []
+        self.blocked = mark
         added, removed = list(self.added), list(self.removed)
         self.added.clear()
         self.removed.clear()
@@ -510,6 +522,11 @@ class BruteForceMatcher:
     def take_changes(self) -> tuple[list[Match], list[Match]]:
         self._refresh()
         return self._changes.take()
+
+    def mark_removals(self) -> None:
+        """No order to keep: the matches are found again all at once."""
+
+    blocked_retractions = -1
 
     def matches(self, name: str) -> list[Match]:
         self._refresh()
@@ -2205,6 +2222,15 @@ class Rete:
             self._flush()
         return self._changes.take()
 
+    def mark_removals(self) -> None:
+        """The WMEs removed from here on: the retractions reported before were made by
+        added WMEs (``blocked_retractions`` counts them at the next take_changes)."""
+        self._changes.mark_removals()
+
+    @property
+    def blocked_retractions(self) -> int:
+        return self._changes.blocked
+
     def matches(self, name: str) -> list[Match]:
         if self._pending:
             self._flush()
@@ -2529,3 +2555,126 @@ class Rete:
             if children:
                 tok.children = None
                 stack.extend(children)
+
+
+# ---------------------------------------------------------------------------------------------
+# The kernel Rete's order of making matches
+# ---------------------------------------------------------------------------------------------
+#
+# Which of several matches made by one WME the kernel fires first is its Rete's order of
+# making them (its match-set lists take the newest first).  Measured against soar_sml 9.6:
+# a WME enters its alpha memories (* ^attr *) before (* ^attr value); an alpha memory
+# right-activates its join nodes oldest first (a new join goes to the tail of the list);
+# a join passes a token to its children newest first (a new child goes to the head), and
+# all its positive continuations hang below one beta memory, made with the first of them.
+# The kernel's join nodes are its own: the conditions in the kernel's order (reorder.py),
+# shared by equal prefixes.  This model builds that tree of nodes (no memories, no tokens):
+# a production's nodes are numbered when made, and a match's place is the path from the
+# join that the WME activated down to the production.
+
+
+class _KernelNode:
+    __slots__ = ("serial", "born", "children", "users")
+
+    def __init__(self, serial: int, born: int) -> None:
+        self.serial = serial
+        self.born = born  # the timetag counter when it was made
+        self.children: dict[object, _KernelNode] = {}
+        self.users = 0
+
+
+_KERNEL_VAR = re.compile(r"<[^<>\s]+>")
+
+
+class KernelOrder:
+    """The kernel's node tree for the loaded productions (see above).  ``add`` gives, per
+    written condition index of a positive condition, ``(kernel position, written indexes
+    of the positive conditions before it, when its join was made, path key)``: the match
+    a WME makes through that condition is made in the order of the path keys, except that
+    a join whose parent memory was empty is unlinked from its alpha memory and relinked
+    at the tail when the memory gets a token: its place is then the newest WME of the
+    conditions before it, when that is newer than the join (``Agent._kernel_key``)."""
+
+    def __init__(self) -> None:
+        from sann.soar import reorder
+
+        self._reorder = reorder
+        self._ages: dict[tuple[type, object], int] = {
+            (str, s): i for i, s in enumerate(reorder._PREDEFINED)}
+        self._serial = 0
+        self._top = _KernelNode(0, 0)
+        self._paths: dict[str, list[tuple[_KernelNode, object, _KernelNode]]] = {}
+        self._places: dict[str, dict[int, tuple]] = {}
+
+    def _node(self, parent: _KernelNode, key: object,
+              path: list[tuple[_KernelNode, object, _KernelNode]], now: int) -> _KernelNode:
+        node = parent.children.get(key)
+        if node is None:
+            self._serial += 1
+            node = parent.children[key] = _KernelNode(self._serial, now)
+        node.users += 1
+        path.append((parent, key, node))
+        return node
+
+    def add(self, production: Production, now: int
+            ) -> dict[int, tuple[int, tuple[int, ...], int, tuple[int, ...]]]:
+        reorder = self._reorder
+        for value in reorder._constants(production):
+            self._ages.setdefault((type(value), value), len(self._ages))
+        ordered = reorder.kernel_conditions(production, self._ages, {})
+        names: dict[str, str] = {}
+
+        def canonical(text: str) -> str:
+            return _KERNEL_VAR.sub(
+                lambda m: names.setdefault(m.group(0), f"<{len(names)}>"), text)
+
+        path: list[tuple[_KernelNode, object, _KernelNode]] = []
+        node, is_join = self._top, False
+        joins: list[tuple[int, int, int]] = []  # (written index, kernel position, path length)
+        for position, kcond in enumerate(ordered):
+            if kcond.is_ncc:
+                key: object = ("ncc", tuple(canonical(reorder.format_kcond(c))
+                                            for c in kcond.inner))
+            else:
+                key = canonical(reorder.format_kcond(kcond))
+            parent = node
+            positive = not kcond.negated and not kcond.is_ncc
+            if positive and is_join:
+                parent = self._node(node, "memory", path, now)
+            node = self._node(parent, key, path, now)
+            if positive:
+                joins.append((kcond.index, position, len(path)))
+            is_join = positive
+        self._serial += 1
+        pnode = _KernelNode(self._serial, now)
+        node.children[("p", production.name)] = pnode
+        pnode.users = 1
+        path.append((node, ("p", production.name), pnode))
+        self._paths[production.name] = path
+        below = [-step[2].serial for step in path]
+        places: dict[int, tuple[int, tuple[int, ...], int, tuple[int, ...]]] = {}
+        for k, (index, position, length) in enumerate(joins):
+            if index not in places:
+                join = path[length - 1][2]
+                before = tuple(dict.fromkeys(j[0] for j in joins[:k]))
+                places[index] = (position, before, join.born, (join.serial, *below[length:]))
+        self._places[production.name] = places  # shared with the caller: see restart
+        return places
+
+    def restart(self) -> None:
+        """Working memory was emptied (init-soar): every join counts as made before it."""
+        stack = [self._top]
+        while stack:
+            node = stack.pop()
+            node.born = 0
+            stack.extend(node.children.values())
+        for places in self._places.values():
+            for index, (position, before, _, key) in list(places.items()):
+                places[index] = (position, before, 0, key)
+
+    def remove(self, name: str) -> None:
+        self._places.pop(name, None)
+        for parent, key, node in reversed(self._paths.pop(name, [])):
+            node.users -= 1
+            if node.users <= 0:
+                del parent.children[key]

@@ -1,0 +1,109 @@
+"""The order in which new matches of one elaboration wave fire (and retract), compared with
+the real Soar 9.6 kernel (soar_sml) through the ``Firing``/``Retracting`` lines of
+``watch 3``.  The kernel fires the newest match of its Rete first: a WME enters (* ^a *)
+before (* ^a v); an alpha memory activates its join nodes oldest first; a join passes a
+token to its children newest first; the join nodes are those of the kernel's condition
+order, shared by equal prefixes (see ``KernelOrder`` in rete.py)."""
+
+from __future__ import annotations
+
+import io
+import re
+
+import pytest
+from test_agent_kernel import generated_agent
+
+from sann.soar import Agent
+
+sml = pytest.importorskip("soar_sml")
+
+HEAD = """sp {prop (state <s> ^superstate nil -^done) --> (<s> ^operator <o> +) (<o> ^name go)}
+sp {apply (state <s> ^operator.name go) --> (<s> ^done yes ^x 1)}
+"""
+
+SHAPES = {
+    # p-nodes below one shared join: the later-loaded production's match is made first
+    "shared-join": [f"sp {{p*{i} (state <s> ^superstate nil ^x <v>) --> (write {i})}}"
+                    for i in range(4)],
+    # separate joins on one alpha memory: the earlier-built join is activated first
+    "separate-joins": [f"sp {{p*{i} (state <s> ^superstate nil ^x <v> {t}) --> (write {i})}}"
+                       for i, t in enumerate(["< 5", "> -1", "<> 7", ""])],
+    "separate-joins-no-superstate": [f"sp {{p*{i} (state <s> ^x <v> {t}) --> (write {i})}}"
+                                     for i, t in enumerate(["< 5", "> -1", "<> 7", ""])],
+    # (* ^x *) before (* ^x 1), shared joins in each
+    "alpha-memories": [
+        "sp {p*0 (state <s> ^superstate nil ^x 1) --> (write 0)}",
+        "sp {p*1 (state <s> ^superstate nil ^x <v>) --> (write 1)}",
+        "sp {p*2 (state <s> ^superstate nil ^x 1) --> (write 2)}",
+        "sp {p*3 (state <s> ^superstate nil ^x <v>) --> (write 3)}",
+    ],
+    # a negation and a constant test move in the kernel's order, so no join is shared
+    "reordered-negation": [
+        "sp {p*0 (state <s> ^superstate nil ^x <v> ^done yes) --> (write 0)}",
+        "sp {p*1 (state <s> ^superstate nil ^x <v>) --> (write 1)}",
+        "sp {p*2 (state <s> ^superstate nil ^x <v> -^flag) --> (write 2)}",
+        "sp {p*3 (state <s> ^superstate nil ^x <c>) --> (write 3)}",
+    ],
+    # a beta memory below a join, made with its first positive continuation
+    "memory-below-join": [
+        "sp {p*0 (state <s> ^superstate nil ^x <v> ^done yes) --> (write 0)}",
+        "sp {p*1 (state <s> ^superstate nil ^x <v>) --> (write 1)}",
+        "sp {p*2 (state <s> ^superstate nil ^x <v> ^io <i>) --> (write 2)}",
+        "sp {p*3 (state <s> ^superstate nil ^x <v> -^nothing) --> (write 3)}",
+    ],
+}
+
+
+def kernel_events(text: str, decisions: int, tmp_path) -> list[str]:
+    path = tmp_path / "agent.soar"
+    path.write_text(text)
+    kernel = sml.Kernel.CreateKernelInCurrentThread(True, 0)
+    try:
+        agent = kernel.CreateAgent("order")
+        log: list[str] = []
+        agent.RegisterForPrintEvent(
+            sml.smlEVENT_PRINT, lambda mid, ud, ag, msg: log.append(msg), None
+        )
+        agent.ExecuteCommandLine(f"source {path}")
+        agent.ExecuteCommandLine("watch 3")
+        log.clear()
+        agent.ExecuteCommandLine(f"run {decisions}")
+    finally:
+        kernel.Shutdown()
+    return _events("".join(log))
+
+
+def our_events(text: str, decisions: int) -> list[str]:
+    out = io.StringIO()
+    agent = Agent(out=out)
+    agent.load(text)
+    agent.trace(3)
+    agent.run(decisions)
+    return _events(out.getvalue())
+
+
+def _events(trace: str) -> list[str]:
+    """Firings, retractions and decisions (identifier numbers and bars blanked)."""
+    events = []
+    for line in trace.splitlines():
+        found = re.match(r"\s*(Firing|Retracting) (\S+)", line)
+        if found:
+            events.append(f"{found.group(1)} {found.group(2).strip('|')}")
+        elif re.match(r"\s+\d+:", line):
+            events.append(re.sub(r"\b([A-Z])\d+\b", r"\1#", line.strip()))
+    return events
+
+
+@pytest.mark.parametrize("shape", sorted(SHAPES))
+def test_new_matches_of_one_wme_fire_in_kernel_order(shape: str, tmp_path) -> None:
+    text = HEAD + "\n".join(SHAPES[shape]) + "\n"
+    assert our_events(text, 2) == kernel_events(text, 2, tmp_path)
+
+
+@pytest.mark.parametrize("seed", [5, 7, 31, 44])
+def test_generated_agent_fires_in_kernel_order(seed: int, tmp_path) -> None:
+    """Seed 44: (S1 ^count 0) makes three matches in one wave (elab, pc, pb in the kernel);
+    with indifferent-selection --first the kernel picks b.  Seeds 5 and 7: retractions, of
+    removed WMEs first, then those a new WME blocked, each oldest match first."""
+    text = generated_agent(seed)
+    assert our_events(text, 3) == kernel_events(text, 3, tmp_path)
