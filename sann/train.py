@@ -7,7 +7,6 @@ interval, because a single run of a 5-unit net says little.
 
 from __future__ import annotations
 
-import copy
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
@@ -92,11 +91,12 @@ def train_seeds(
 
     Each seed's net starts from the weights ``make_net`` gives after ``torch.manual_seed(seed)``
     and sees its own order of mini-batches (a generator seeded with ``seed``), as if trained
-    alone. The nets' parameters are stacked and run under ``torch.vmap`` (torch.func's model
-    ensembling), so a step costs the Python and dispatch overhead once for all seeds: for the
-    paper's 5-unit net that overhead is most of the time. The loss is the sum of the nets' mean
-    losses, so each net's gradient is its own, and Adam updates each element on its own: the
-    numbers equal separate runs up to float rounding (tests/test_train.py)."""
+    alone. The nets' layers are stacked into batched matrix products (`StackedNets`), so a
+    step pays torch's per-operation overhead once for all seeds: for the paper's 5-unit net
+    that overhead is nearly all of the time (five seeds cost what one did; torch.vmap over
+    torch.func's stacked state, tried first, cost twice as much per step). The loss is the sum
+    of the nets' mean losses, so each net's gradient is its own, and Adam updates each element
+    on its own: the numbers equal separate runs up to float rounding (tests/test_train.py)."""
     seeds = [int(s) for s in seeds]
     if not seeds:
         raise ValueError("train_seeds needs at least one seed")
@@ -112,14 +112,9 @@ def train_seeds(
     for seed in seeds:
         torch.manual_seed(seed)
         models.append(make_net(xt.shape[1]))
-    params, buffers = torch.func.stack_module_state(models)
-    skeleton = copy.deepcopy(models[0]).to("meta")
-
-    def call(p: dict, b: dict, x: torch.Tensor) -> torch.Tensor:
-        return torch.func.functional_call(skeleton, (p, b), (x,))
-
-    batched, on_test = torch.vmap(call), torch.vmap(call, in_dims=(0, 0, None))
-    optimiser = torch.optim.Adam(params.values(), lr=config.lr, weight_decay=config.weight_decay)
+    stack = StackedNets(models, probe=xt[:8])
+    optimiser = torch.optim.Adam(stack.parameters(), lr=config.lr,
+                                 weight_decay=config.weight_decay)
     orders = [torch.Generator().manual_seed(seed) for seed in seeds]
     errors, losses = [], []
     epochs = range(config.epochs)
@@ -132,24 +127,95 @@ def train_seeds(
         total = torch.zeros(len(seeds))
         for batch in order.split(config.batch_size, dim=1):
             optimiser.zero_grad()
-            logits = batched(params, buffers, xt[batch])
-            each = nn.functional.cross_entropy(logits.flatten(0, 1), yt[batch].flatten(),
+            each = nn.functional.cross_entropy(stack(xt[batch]).flatten(0, 1),
+                                               yt[batch].flatten(),
                                                reduction="none").view(len(seeds), -1).mean(1)
             each.sum().backward()
             optimiser.step()
             total += each.detach() * batch.shape[1]
         losses.append((total / len(xt)).tolist())
         with torch.no_grad():
-            wrong = (on_test(params, buffers, xv).argmax(-1) != yv).sum(1)
+            wrong = (stack(xv).argmax(-1) != yv).sum(1)
         errors.append([w / len(yv) for w in wrong.tolist()])
+    stack.write_back()
     results = []
     for k, (seed, model) in enumerate(zip(seeds, models, strict=True)):
-        model.load_state_dict({name: value[k].detach().clone() for name, value in params.items()})
         model.eval()
         curve = [epoch[k] for epoch in errors]
         results.append(TrainResult(seed, curve, [epoch[k] for epoch in losses],
                                    1.0 - curve[-1], model, scaler))
     return results
+
+
+#: Layers that act on each number alone: the same module serves every stacked net.
+ELEMENTWISE = (nn.Tanh, nn.ReLU, nn.Sigmoid, nn.Identity)
+
+
+class StackedNets:
+    """Nets of one architecture, made of ``nn.Linear`` layers and elementwise activations
+    applied in the order they are registered, run as one net on a batch per net: each
+    Linear's weights become one (nets, in, out) tensor and its forward a batched matrix
+    product. ``probe`` rows check that the stack computes what each net computes (a net whose
+    forward does something else is refused)."""
+
+    def __init__(self, models: Sequence[nn.Module], probe: torch.Tensor) -> None:
+        self.models = list(models)
+        self.layers: list = []
+        leaves = [[m for m in net.modules() if next(m.children(), None) is None]
+                  for net in self.models]
+        for position in zip(*leaves, strict=True):
+            self.layers.append(self._stack(position))
+        with torch.no_grad():
+            mine = self(probe)
+            for k, net in enumerate(self.models):
+                if not torch.allclose(mine[k], net(probe), atol=1e-5):
+                    raise ValueError(
+                        f"{type(net).__name__} cannot be stacked: its forward is not its "
+                        "Linear layers and activations in the order they are registered")
+
+    @staticmethod
+    def _stack(position: tuple[nn.Module, ...]):
+        first = position[0]
+        if isinstance(first, nn.Linear):
+            weight = torch.stack([m.weight.detach().T for m in position]).contiguous()
+            bias = (None if first.bias is None
+                    else torch.stack([m.bias.detach()[None] for m in position]))
+            return (weight.requires_grad_(),
+                    None if bias is None else bias.requires_grad_())
+        if isinstance(first, ELEMENTWISE):
+            return first
+        raise ValueError(f"cannot stack a {type(first).__name__} layer (Linear and "
+                         f"{', '.join(t.__name__ for t in ELEMENTWISE)} only)")
+
+    def parameters(self) -> list[torch.Tensor]:
+        return [t for layer in self.layers if type(layer) is tuple for t in layer
+                if t is not None]
+
+    def __call__(self, x: torch.Tensor) -> torch.Tensor:
+        """(nets, batch, in) -> (nets, batch, out); a 2-D ``x`` is fed to every net."""
+        for layer in self.layers:
+            if type(layer) is tuple:
+                weight, bias = layer
+                if bias is None:
+                    x = x @ weight
+                elif x.dim() == 3:
+                    x = torch.baddbmm(bias, x, weight)
+                else:
+                    x = x @ weight + bias
+            else:
+                x = layer(x)
+        return x
+
+    def write_back(self) -> None:
+        """Put the trained weights into the nets themselves."""
+        linear = [layer for layer in self.layers if type(layer) is tuple]
+        with torch.no_grad():
+            for k, net in enumerate(self.models):
+                mine = [m for m in net.modules() if isinstance(m, nn.Linear)]
+                for module, (weight, bias) in zip(mine, linear, strict=True):
+                    module.weight.copy_(weight[k].T)
+                    if bias is not None:
+                        module.bias.copy_(bias[k, 0])
 
 
 def summarise(values: Sequence[float]) -> dict:

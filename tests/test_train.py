@@ -6,7 +6,15 @@ import torch
 from torch import nn
 
 from sann.nets import DeepNet, ShallowNet
-from sann.train import Standardiser, TrainConfig, intervals_overlap, summarise, train, train_seeds
+from sann.train import (
+    StackedNets,
+    Standardiser,
+    TrainConfig,
+    intervals_overlap,
+    summarise,
+    train,
+    train_seeds,
+)
 
 
 def _xor_like(n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -96,3 +104,22 @@ def test_train_seeds_refuses_empty_input():
         train_seeds(make, x[:0], y[:0], x, y, [1])
     with pytest.raises(ValueError, match="epochs"):
         train_seeds(make, x, y, x, y, [1], TrainConfig(epochs=0))
+
+
+class _Residual(nn.Module):
+    """A net whose forward is not its layers in order: stacking must refuse it."""
+
+    def __init__(self, n: int) -> None:
+        super().__init__()
+        self.a, self.b = nn.Linear(n, n), nn.Linear(n, 2)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return self.b(x + self.a(x))
+
+
+def test_stacking_refuses_nets_it_cannot_compute():
+    probe = torch.randn(4, 3)
+    with pytest.raises(ValueError, match="cannot be stacked"):
+        StackedNets([_Residual(3), _Residual(3)], probe)
+    with pytest.raises(ValueError, match="cannot stack a Dropout"):
+        StackedNets([nn.Sequential(nn.Linear(3, 2), nn.Dropout())], probe)

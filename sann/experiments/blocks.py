@@ -26,7 +26,9 @@ MODES = ("C1", "C2", "C3")
 
 @dataclass(frozen=True)
 class BlocksExperiment:
-    """Sizes and settings of one reproduction; `quick()` is the small version for tests."""
+    """Sizes and settings of one reproduction; `quick()` is the small version for tests.
+    ``tsne_points=0`` leaves out the t-SNE figures (13-14), e.g. where another part of the
+    book draws them."""
 
     n_train: int = 10_000
     n_test: int = 2_000
@@ -127,6 +129,8 @@ def _figures(out: Path, results: dict, tsne_input, config: BlocksExperiment) -> 
                         out / "fig9a_accuracy_D1.png")
     plots.accuracy_bars(results["accuracy"]["D2"], "Fig. 9b: test accuracy, D2",
                         out / "fig9b_accuracy_D2.png")
+    if config.tsne_points <= 0:
+        return
     data, runs = tsne_input
     tsne = tsne_layers(data, runs, config.tsne_points, config.data_seed)
     plots.tsne_pair(tsne["maps"]["input"], tsne["labels"], "Fig. 13: t-SNE of the input layer",
