@@ -22,7 +22,7 @@ from .errors import SoarError, SoarRuntimeError
 from .memory import WME, Identifier, Symbol
 from .preferences import Preference, preference_type
 from .production import CallAction, Const, FuncCall, MakeAction, Production, RhsValue, Var
-from .rhs import FUNCTIONS, format_value
+from .rhs import FUNCTIONS, kernel_shown
 
 if TYPE_CHECKING:
     from .goals import Goal
@@ -111,31 +111,62 @@ def interpret_actions(
         try:
             if type(action) is MakeAction:
                 pref = _make_preference(agent, action, bindings, inst)
-                if pref is not None:
-                    if o_support and pref.id not in operators:
-                        pref.o_supported = True
-                    prefs.append(pref)
+                if o_support and pref.id not in operators:
+                    pref.o_supported = True
+                prefs.append(pref)
             else:
                 _call(agent, action.call, bindings, inst)  # type: ignore[union-attr]
-        except SoarError as error:
-            agent._report_rhs_error(inst, error)  # type: ignore[attr-defined]
+        except (Abandoned, SoarError) as error:
+            _report(agent, inst, error)
+
+
+class Abandoned(Exception):  # noqa: N818 -- not an error: one already reported
+    """A function call given a failed argument, and so the action holding it: the kernel
+    evaluates every argument of a call (each failure prints its error), then calls nothing
+    and drops the action, silently (measured: ``(write (+ a 1) (/ 1 0))`` prints two errors
+    and writes nothing)."""
+
+
+def _report(agent: object, inst: Instantiation, error: Exception) -> None:
+    """Print a failed action's error, unless it was printed already (`Abandoned`)."""
+    if type(error) is not Abandoned:
+        agent._report_rhs_error(inst, error)  # type: ignore[attr-defined]
+
+
+def not_an_identifier(action: MakeAction, bound: Container[str], ident: Symbol) -> SoarRuntimeError:
+    """The kernel's error for an action whose identifier is bound to a constant, raised as
+    soon as the identifier is known (the attribute and value are not evaluated). It shows
+    the action as the kernel stores it: a variable of the left-hand side as ``[RETE-loc]``,
+    any other as ``<unbound-variable>``, floats as ``%f``, the preference and referent."""
+
+    def shown(node: RhsValue) -> str:
+        kind = type(node)
+        if kind is Var:
+            return "[RETE-loc]" if node.name in bound else "<unbound-variable>"  # type: ignore[union-attr]
+        if kind is FuncCall:
+            return "(" + " ".join([node.name, *map(shown, node.args)]) + ")"  # type: ignore[union-attr]
+        return kernel_shown(node.value)  # type: ignore[union-attr]
+
+    text = f"{shown(action.id)} ^{shown(action.attr)} {shown(action.value)} {action.preference}"
+    if action.referent is not None:
+        text += " " + shown(action.referent)
+    return SoarRuntimeError(
+        f"RHS of action           ({text}) makes a preference for {kernel_shown(ident)}"
+        " (not an identifier)"
+    )
 
 
 def _make_preference(
     agent: object, action: MakeAction, bindings: dict[str, Symbol], inst: Instantiation
-) -> Preference | None:
+) -> Preference:
     ident = _value(agent, action.id, bindings, inst)
+    if type(ident) is not Identifier:
+        raise not_an_identifier(action, inst.match.bindings, ident)  # type: ignore[attr-defined]
     attr = _value(agent, action.attr, bindings, inst)
     value = _value(agent, action.value, bindings, inst)
     referent = None
     if action.referent is not None:
         referent = _value(agent, action.referent, bindings, inst)
-    if type(ident) is not Identifier:
-        agent._emit(  # type: ignore[attr-defined]
-            f"\nError: production {inst.name} makes a preference for a non-identifier"
-            f" {format_value(ident)}; action ignored."
-        )
-        return None
     ptype = action.preference
     if referent is not None:
         ptype = preference_type(ptype, referent)
@@ -168,7 +199,16 @@ def _call(
     function = FUNCTIONS.get(call.name)
     if function is None:
         raise SoarRuntimeError(f"unknown RHS function ({call.name})")
-    args = [_value(agent, arg, bindings, inst) for arg in call.args]
+    args = []
+    failed = False
+    for arg in call.args:  # a loop is no slower than a list comprehension in CPython 3.11
+        try:
+            args.append(_value(agent, arg, bindings, inst))
+        except (Abandoned, SoarError) as error:
+            _report(agent, inst, error)
+            failed = True
+    if failed:
+        raise Abandoned
     return function(agent, args)  # type: ignore[arg-type]
 
 
@@ -180,9 +220,12 @@ def compile_actions(
     Interpreting the actions cost more than anything else in firing; the compiled form
     does the same steps in the same order: per make-action the identifier, attribute,
     value and referent are evaluated (an unbound variable becomes a new identifier at its
-    first evaluation, named after the variable), then a preference is made unless the
-    identifier is not one (an error line, as in the kernel). A `SoarError` in an action is
-    reported by the agent (``_report_rhs_error``) and drops that action only.
+    first evaluation, named after the variable; an identifier that is not one is an error
+    at once, `not_an_identifier`), then a preference is made. A `SoarError` in an action is
+    reported by the agent (``_report_rhs_error``) and drops that action only; a failed
+    argument of a function call is reported and the call's other arguments are still
+    evaluated, then the action is dropped (`Abandoned`). Error handling costs nothing until
+    an error: the code after a failure is generated separately, in the ``except`` blocks.
 
     ``bound`` names the variables every match binds (the left-hand side's: the same for
     all matches of a production); reading them needs no check for a new identifier."""
@@ -202,8 +245,10 @@ class _RhsCompiler:
             "Identifier": Identifier,
             "SoarError": SoarError,
             "SoarRuntimeError": SoarRuntimeError,
+            "Abandoned": Abandoned,
+            "report": _report,
+            "not_an_identifier": not_an_identifier,
             "preference_type": preference_type,
-            "format_value": format_value,
         }
         self.locals: dict[str, str] = {}  # variable name -> local holding its value
         self.temps = 0
@@ -216,8 +261,8 @@ class _RhsCompiler:
                 self._make(action, body)
             else:
                 self._call(action.call, body, "        ", check=False)  # type: ignore[union-attr]
-            body.append("    except SoarError as error:")
-            body.append("        agent._report_rhs_error(inst, error)")
+            body.append("    except (Abandoned, SoarError) as error:")
+            body.append("        report(agent, inst, error)")
         head = [
             "def program(agent, b, inst, o_support, operators):",
             "    append = inst.prefs.append",
@@ -237,6 +282,11 @@ class _RhsCompiler:
     def _make(self, action: MakeAction, out: list[str]) -> None:
         ind = "        "
         ident = self._value(action.id, out, ind)
+        out.append(f"{ind}if type({ident}) is not Identifier:")
+        out.append(
+            f"{ind}    raise not_an_identifier({self._const(action)},"
+            f" {self._const(self.bound)}, {ident})"
+        )
         attr = self._value(action.attr, out, ind)
         value = self._value(action.value, out, ind)
         ptype = self._const(action.preference)
@@ -245,17 +295,13 @@ class _RhsCompiler:
             referent = self._value(action.referent, out, ind)
             ptype = f"preference_type({ptype}, {referent})"
         out += [
-            f"{ind}if type({ident}) is not Identifier:",
-            f"{ind}    agent._emit('\\nError: production ' + inst.name + ' makes a preference"
-            f" for a non-identifier ' + format_value({ident}) + '; action ignored.')",
-            f"{ind}else:",
             # Preference.__init__, inline: CPython 3.11 runs a class's Python __init__
             # through a C call into a new interpreter frame
-            f"{ind}    p = NEW(Preference); p.type = {ptype}; p.id = {ident}; p.attr = {attr}",
-            f"{ind}    p.value = {value}; p.referent = {referent}; p.inst = inst",
-            f"{ind}    p.o_supported = o_support and {ident} not in operators",
-            f"{ind}    p.slot = None; p.live = False",
-            f"{ind}    append(p)",
+            f"{ind}p = NEW(Preference); p.type = {ptype}; p.id = {ident}; p.attr = {attr}",
+            f"{ind}p.value = {value}; p.referent = {referent}; p.inst = inst",
+            f"{ind}p.o_supported = o_support and {ident} not in operators",
+            f"{ind}p.slot = None; p.live = False",
+            f"{ind}append(p)",
         ]
 
     def _value(self, node: RhsValue, out: list[str], ind: str) -> str:
@@ -283,7 +329,17 @@ class _RhsCompiler:
             message = f"unknown RHS function ({call.name})"
             out.append(f"{ind}raise SoarRuntimeError({self._const(message)})")
             return "None"
-        args = [self._value(arg, out, ind) for arg in call.args]
+        args = []
+        for index, arg in enumerate(call.args):
+            if type(arg) is not FuncCall:  # a variable or constant: cannot fail
+                args.append(self._value(arg, out, ind))
+                continue
+            out.append(f"{ind}try:")
+            args.append(self._value(arg, out, ind + "    "))
+            out.append(f"{ind}except (Abandoned, SoarError) as error:")
+            out.append(f"{ind}    report(agent, inst, error)")
+            self._evaluate_rest(call.args[index + 1 :], out, ind + "    ")
+            out.append(f"{ind}    raise Abandoned")
         temp = f"t{self.temps}"
         self.temps += 1
         out.append(f"{ind}{temp} = {self._const(function)}(agent, [{', '.join(args)}])")
@@ -292,6 +348,18 @@ class _RhsCompiler:
             out.append(f"{ind}if {temp} is None:")
             out.append(f"{ind}    raise SoarRuntimeError({self._const(message)})")
         return temp
+
+    def _evaluate_rest(self, args: Sequence[RhsValue], out: list[str], ind: str) -> None:
+        """After a failed argument, the call's other arguments, for their errors and new
+        identifiers only (the kernel evaluates them all)."""
+        for arg in args:
+            if type(arg) is FuncCall:
+                out.append(f"{ind}try:")
+                self._value(arg, out, ind + "    ")
+                out.append(f"{ind}except (Abandoned, SoarError) as error:")
+                out.append(f"{ind}    report(agent, inst, error)")
+            else:
+                self._value(arg, out, ind)
 
 
 class Instantiation:

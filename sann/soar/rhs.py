@@ -14,6 +14,13 @@ numbers (until an indifferent choice, whose draws follow our own selection code)
 
 Which functions may be called where, and with how many arguments, is checked when a rule is
 loaded (`sann.soar.syntax`); the functions still check their arguments, for direct calls.
+
+A function given bad arguments raises `SoarRuntimeError` with the kernel's very text
+(measured in soar_sml 9.6, ``kernel_shown`` showing symbols as the kernel's messages do); the
+agent prints it as ``Error: <text>`` and a newline where the output stands, or on a fresh
+line for a `FreshLineError`, and drops the action. Where the kernel takes a bad argument
+without a word we do too, with its value: ``int`` and ``float`` read any string as C's
+``strtol``/``strtod`` (``(int a)`` is 0), ``(sqrt -1)`` is ``-nan``, ``(min)`` is 0.
 """
 
 from __future__ import annotations
@@ -21,6 +28,7 @@ from __future__ import annotations
 import datetime
 import math
 import random
+import re
 import struct
 import time
 from collections.abc import Callable, Iterable, Sequence
@@ -70,20 +78,33 @@ def format_value(value: Symbol) -> str:
 
 
 def _format_float(value: float) -> str:
+    """C's ``%f``: a NaN with its sign bit set is ``-nan`` (measured: ``(sqrt -1)``)."""
     if math.isinf(value):
         return "inf" if value > 0 else "-inf"
     if math.isnan(value):
-        return "nan"
+        return "-nan" if math.copysign(1.0, value) < 0 else "nan"
     return f"{value:f}"
 
 
+#: The NaN x86 makes of an invalid operation (``sqrt(-1)``, ``inf * 0``): sign bit set.
+_X86_NAN = -math.nan
+
+
+class FreshLineError(SoarRuntimeError):
+    """An RHS error whose kernel message starts on a fresh line: after a newline unless the
+    output is already at the start of one (measured for ``trim``, ``capitalize-symbol``,
+    ``dont-learn``, ``force-learn`` and ``log``; the other functions' messages follow
+    whatever was printed last, ``xError: ...``). Both end with a newline."""
+
+    fresh_line = True
+
+
 def _number(name: str, value: Symbol) -> int | float:
+    """A number argument of ``+ - * / min max``, or the kernel's complaint."""
     kind = type(value)
-    if kind is int or kind is float:  # the usual case, without building a union type
+    if kind is int or kind is float:
         return value  # type: ignore[return-value]
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise SoarRuntimeError(f"({name}): {format_value(value)} is not a number")
-    return value
+    raise SoarRuntimeError(f"non-number ({kernel_shown(value)}) passed to {name} function")
 
 
 def _numbers(name: str, args: Sequence[Symbol]) -> list[int | float]:
@@ -109,7 +130,7 @@ def _times(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
 def _minus(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
     nums = _numbers("-", args)
     if not nums:
-        raise SoarRuntimeError("(-): needs at least one argument")
+        raise SoarRuntimeError("'-' function called with no arguments")
     if len(nums) == 1:
         return _int64(-nums[0])
     result = nums[0]
@@ -119,27 +140,33 @@ def _minus(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
 
 
 def _divide(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    """Every argument is checked before any division (measured: ``(/ 0 a)`` and ``(/ a 0)``
+    both complain of ``a``); ``(/ x)`` is ``1 / x``."""
     nums = [float(n) for n in _numbers("/", args)]
     if not nums:
-        raise SoarRuntimeError("(/): needs at least one argument")
+        raise SoarRuntimeError("'/' function called with no arguments")
     if len(nums) == 1:
         nums.insert(0, 1.0)
     result = nums[0]
     for n in nums[1:]:
         if n == 0:
-            raise SoarRuntimeError("(/): attempt to divide by zero")
+            raise SoarRuntimeError("attempt to divide ('/') by zero.")
         result /= n
     return result
 
 
 def _int_pair(name: str, args: Sequence[Symbol]) -> tuple[int, int]:
-    if len(args) != 2 or not all(isinstance(a, int) and not isinstance(a, bool) for a in args):
+    """Both arguments integers, checked before the divisor (measured: ``(div 1.5 0)``
+    complains of 1.5, ``(div 1 0)`` of the zero)."""
+    if len(args) != 2:
         raise SoarRuntimeError(f"({name}): needs two integer arguments")
+    for arg in args:
+        if type(arg) is not int:
+            raise SoarRuntimeError(f"non-integer ({kernel_shown(arg)}) passed to {name} function")
     a, b = args
-    assert isinstance(a, int) and isinstance(b, int)
     if b == 0:
-        raise SoarRuntimeError(f"({name}): attempt to divide by zero")
-    return a, b
+        raise SoarRuntimeError(f"attempt to divide ('{name}') by zero.")
+    return a, b  # type: ignore[return-value]
 
 
 def _div(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
@@ -159,32 +186,129 @@ def _one(name: str, args: Sequence[Symbol]) -> Symbol:
     return args[0]
 
 
+def _math_number(name: str, value: Symbol) -> int | float:
+    """A number argument of ``abs``, ``sqrt``, ``sin`` and ``cos``, or the kernel's complaint."""
+    if type(value) is int or type(value) is float:
+        return value  # type: ignore[return-value]
+    raise SoarRuntimeError(
+        f"'{name}' function called with non-numeric argument {kernel_shown(value)}"
+    )
+
+
 def _abs(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
-    return abs(_number("abs", _one("abs", args)))
+    """``(abs -9223372036854775808)`` stays itself, as C's ``llabs`` leaves it (measured)."""
+    return _int64(abs(_math_number("abs", _one("abs", args))))
 
 
 def _to_int(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    """The kernel's ``int`` (all measured): a float truncated as C's cast (NaN, infinities
+    and out of range give -9223372036854775808); a string read by C's ``strtol``, base 10:
+    what leading spaces, a sign and digits spell, 0 if nothing (``|12abc|`` is 12, ``|1e5|``
+    1, ``|a|`` 0), an error only when out of 64-bit range; an identifier is an error."""
     value = _one("int", args)
-    if isinstance(value, str):
-        try:
-            return int(float(value)) if "." in value or "e" in value.lower() else int(value)
-        except ValueError as exc:
-            raise SoarRuntimeError(f"(int): cannot convert {value!r} to an integer") from exc
-    return int(_number("int", value))
+    kind = type(value)
+    if kind is int:
+        return value
+    if kind is float:
+        return _c_int64(value)  # type: ignore[arg-type]
+    if kind is str:
+        number = _strtol(value)  # type: ignore[arg-type]
+        if number is None:
+            raise SoarRuntimeError(
+                f"bad integer ({kernel_shown(value)}) given to 'int' RHS function"
+            )
+        return number
+    raise SoarRuntimeError(f"identifier ({kernel_shown(value)}) passed to 'int' RHS function.")
 
 
 def _to_float(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
+    """The kernel's ``float``: a string read by C's ``strtod`` (what its longest prefix
+    spells, 0.0 if nothing: ``|2.5x|`` is 2.5, ``|0x1p3|`` 8.0, ``|a|`` 0.0), an error when
+    the number is out of range (``|1e999|``, ``|1e-320|``); an identifier is an error."""
     value = _one("float", args)
-    if isinstance(value, str):
+    kind = type(value)
+    if kind is float:
+        return value
+    if kind is int:
+        return float(value)  # type: ignore[arg-type]
+    if kind is str:
+        number = _strtod(value)  # type: ignore[arg-type]
+        if number is None:
+            raise SoarRuntimeError(
+                f"bad float ({kernel_shown(value)}) given to 'float' RHS function"
+            )
+        return number
+    raise SoarRuntimeError(f"identifier ({kernel_shown(value)}) passed to 'float' RHS function.")
+
+
+#: What C's ``strtol`` (base 10) and ``strtod`` read, after the spaces ``isspace`` skips.
+_STRTOL = re.compile(r"[ \t\n\v\f\r]*([+-]?[0-9]+)")
+_STRTOD = re.compile(
+    r"""[ \t\n\v\f\r]*([+-]?)(?:
+        0[xX](?P<hex>(?:[0-9a-fA-F]+\.?[0-9a-fA-F]*|\.[0-9a-fA-F]+)(?:[pP][+-]?[0-9]+)?)
+      | (?P<dec>(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?)
+      | (?P<inf>[iI][nN][fF])
+      | (?P<nan>[nN][aA][nN])
+    )""",
+    re.VERBOSE,
+)
+_DBL_MIN = 2.2250738585072014e-308
+
+
+def _strtol(text: str) -> int | None:
+    """C's ``strtol(text, NULL, 10)`` for a 64-bit long; None where it sets ``ERANGE``."""
+    match = _STRTOL.match(text)
+    if match is None:
+        return 0
+    number = int(match.group(1))
+    return number if -(1 << 63) <= number < 1 << 63 else None
+
+
+def _strtod(text: str) -> float | None:
+    """glibc's ``strtod``; None where it sets ``ERANGE``: a finite number that overflows,
+    or one that is not zero, below the smallest normal double and not exactly a double
+    (measured: ``|0x1p-1074|`` reads, ``|1e-320|`` and ``|2.2250738585072012e-308|`` do not;
+    a NaN keeps its sign, ``|-nan|`` writes ``-nan``)."""
+    match = _STRTOD.match(text)
+    if match is None:
+        return 0.0
+    sign, hex_digits, decimal = match.group(1), match.group("hex"), match.group("dec")
+    if match.group("inf") is not None:
+        return -math.inf if sign == "-" else math.inf
+    if match.group("nan") is not None:
+        return -math.nan if sign == "-" else math.nan
+    if hex_digits is not None:
         try:
-            return float(value)
-        except ValueError as exc:
-            raise SoarRuntimeError(f"(float): cannot convert {value!r} to a float") from exc
-    return float(_number("float", value))
+            number = float.fromhex("0x" + hex_digits)
+        except OverflowError:
+            return None
+        mantissa = hex_digits.lower().partition("p")[0]
+    else:
+        number = float(decimal)
+        mantissa = decimal.lower().partition("e")[0]
+    if math.isinf(number):
+        return None
+    if number == 0.0:
+        if mantissa.strip("0."):
+            return None  # not zero, yet read as zero
+    elif number <= _DBL_MIN:
+        if hex_digits is not None:
+            whole, _, fraction = mantissa.partition(".")
+            exponent = int(hex_digits.lower().partition("p")[2] or 0) - 4 * len(fraction)
+            exact = Fraction(int(whole + fraction, 16)) * Fraction(2) ** exponent
+        else:
+            exact = Fraction(decimal)
+        if exact < _DBL_MIN and Fraction(number) != exact:
+            return None
+    return -number if sign == "-" else number
 
 
 def _sqrt(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
-    return math.sqrt(_number("sqrt", _one("sqrt", args)))
+    """C's ``sqrt``: below zero it is ``-nan`` (measured), ``(sqrt -0.0)`` is ``-0.0``."""
+    value = float(_math_number("sqrt", _one("sqrt", args)))
+    if value < 0:
+        return _X86_NAN
+    return math.sqrt(value)
 
 
 def _min(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
@@ -197,10 +321,10 @@ def _max(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
 
 def _extreme(name: str, pick: Callable[[list], Symbol], args: Sequence[Symbol]) -> Symbol:
     """As in the kernel (measured): a float among the arguments makes the result a float,
-    ``(max 3 1.5)`` is 3.0."""
+    ``(max 3 1.5)`` is 3.0; with no argument it is 0."""
     nums = _numbers(name, args)
     if not nums:
-        raise SoarRuntimeError(f"({name}): needs at least one argument")
+        return 0
     best = pick(nums)
     return float(best) if any(type(n) is float for n in nums) else best
 
@@ -224,11 +348,16 @@ def _rounded(name: str, args: Sequence[Symbol]) -> int | float:
     """`_round_off` under the name of the function that asked (round-off-heading too)."""
     if len(args) != 2:
         raise SoarRuntimeError(f"({name}): needs a number and a precision")
-    value, step = _numbers(name, args)
+    value, step = args
+    if type(value) is not int and type(value) is not float:
+        value = 0  # the kernel reads anything else as 0 (measured: (round-off a 1) is 0)
+    if type(step) is not float:
+        if type(step) is not int or step == 0:
+            # the kernel divides by an integer 0 here and dies (SIGFPE); we report it
+            raise SoarRuntimeError(f"attempt to divide ('{name}') by zero.")
+        return _round_int(int(value), step)  # type: ignore[arg-type]
     if step == 0:
-        raise SoarRuntimeError(f"({name}): precision must not be zero")
-    if isinstance(step, int):
-        return _round_int(int(value), step)
+        return _X86_NAN  # measured: (round-off 1.5 0.0) is -nan
     if abs(step) < 1 and int(step * 10) != 0:
         return _round_tenths(int(value * 10), int(step * 10))
     return _round_float(float(value), step)
@@ -313,7 +442,11 @@ def _ifeq(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
 
 
 def _trim(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
-    return format_value(_one("trim", args)).strip()
+    """A string without its leading and trailing spaces; anything else is an error."""
+    value = _one("trim", args)
+    if type(value) is not str:
+        raise FreshLineError(f"non-symbol ({kernel_shown(value)}) passed to 'trim' function.")
+    return value.strip()
 
 
 def _strlen(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
@@ -321,8 +454,13 @@ def _strlen(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
 
 
 def _trig(name: str, fn: Callable[[float], float]) -> RhsFunction:
+    """``sin``/``cos``; of an infinity C gives ``-nan`` (measured) where Python raises."""
+
     def call(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
-        return fn(float(_number(name, _one(name, args))))
+        try:
+            return fn(float(_math_number(name, _one(name, args))))
+        except ValueError:
+            return _X86_NAN
 
     return call
 
@@ -330,8 +468,10 @@ def _trig(name: str, fn: Callable[[float], float]) -> RhsFunction:
 def _atan2(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
     if len(args) != 2:
         raise SoarRuntimeError("(atan2): needs two arguments")
-    y, x = _numbers("atan2", args)
-    return math.atan2(y, x)
+    for arg in args:
+        if type(arg) is not int and type(arg) is not float:
+            raise SoarRuntimeError(f"non-number ({kernel_shown(arg)}) passed to atan2")
+    return math.atan2(*args)  # type: ignore[arg-type]
 
 
 # ------------------------------------------------------------------ random numbers
@@ -376,7 +516,7 @@ def _kernel_number(name: str, value: Symbol) -> int | float:
     """A number argument, with the kernel's complaint for anything else."""
     if type(value) is int or type(value) is float:
         return value  # type: ignore[return-value]
-    raise SoarRuntimeError(f"non-number ({format_value(value)}) passed to - {name}")
+    raise SoarRuntimeError(f"non-number ({kernel_shown(value)}) passed to - {name}")
 
 
 def _rand_int(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
@@ -416,8 +556,8 @@ def _capitalize_symbol(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
     """The first character upper-cased, in the C locale: ``|éa|`` stays as it is."""
     value = _one("capitalize-symbol", args)
     if type(value) is not str:
-        raise SoarRuntimeError(
-            f"non-symbol ({format_value(value)}) passed to capitalize-symbol function."
+        raise FreshLineError(
+            f"non-symbol ({kernel_shown(value)}) passed to capitalize-symbol function."
         )
     if value and "a" <= value[0] <= "z":
         return value[0].upper() + value[1:]
@@ -487,7 +627,7 @@ def _size(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
     """How many augmentations an identifier has, as the kernel counts them (`_slot_index`)."""
     value = _one("size", args)
     if type(value) is not Identifier:
-        raise SoarRuntimeError(f"non-symbol ({format_value(value)}) passed to size function")
+        raise SoarRuntimeError(f"non-symbol ({kernel_shown(value)}) passed to size function")
     return len(_slot_index(ctx).get(value, ()))
 
 
@@ -523,7 +663,7 @@ def _with_attr(index: dict[Identifier, list[WME]], ident: Symbol, attr: Symbol) 
 # ------------------------------------------------------ arithmetic over working memory
 
 
-def _kernel_shown(value: Symbol) -> str:
+def kernel_shown(value: Symbol) -> str:
     """A symbol as the kernel's error messages show it: a string that would read as a number
     in bars (measured: ``non-number (|2|) passed as 'count'``), floats as ``%f``."""
     if type(value) is str:
@@ -551,14 +691,14 @@ def _int_view(name: str, value: Symbol) -> int:
         return _int32(value.number)  # type: ignore[union-attr]
     raise SoarRuntimeError(
         f"({name}): the kernel reads a memory address for the string value"
-        f" {_kernel_shown(value)}; this engine refuses it"
+        f" {kernel_shown(value)}; this engine refuses it"
     )
 
 
 def _wme_values(name: str, ctx: RhsContext, args: Sequence[Symbol]) -> list[int]:
     ident = _one(name, args)
     if type(ident) is not Identifier:
-        raise SoarRuntimeError(f"non-symbol ({format_value(ident)}) passed to {name} function")
+        raise SoarRuntimeError(f"non-symbol ({kernel_shown(ident)}) passed to {name} function")
     return [_int_view(name, w.value) for w in _slot_index(ctx).get(ident, ())]
 
 
@@ -665,7 +805,7 @@ def _four(name: str, args: Sequence[Symbol]) -> Sequence[Symbol]:
 def _geo_number(value: Symbol) -> float:
     if type(value) is int or type(value) is float:
         return float(value)  # type: ignore[arg-type]
-    raise SoarRuntimeError(f"non int/float ({_kernel_shown(value)}) passed to haversine function.")
+    raise SoarRuntimeError(f"non int/float ({kernel_shown(value)}) passed to haversine function.")
 
 
 def _extrapolate(name: str, trig: Callable[[float], float]) -> RhsFunction:
@@ -688,7 +828,7 @@ def _extrapolate(name: str, trig: Callable[[float], float]) -> RhsFunction:
 def _whole(name: str, value: Symbol) -> int:
     if type(value) is int:
         return value  # type: ignore[return-value]
-    raise SoarRuntimeError(f"non int({_kernel_shown(value)}) passed to {name} function.")
+    raise SoarRuntimeError(f"non int({kernel_shown(value)}) passed to {name} function.")
 
 
 def _c_int32(value: float) -> int:
@@ -733,19 +873,18 @@ def _dice_number(role: str, value: Symbol) -> int | float:
     if type(value) is int or type(value) is float:
         return value  # type: ignore[return-value]
     raise SoarRuntimeError(
-        f"non-number ({_kernel_shown(value)}) passed as '{role}' to - compute-dice-probability"
+        f"non-number ({kernel_shown(value)}) passed as '{role}' to - compute-dice-probability"
     )
 
 
 def _dice_predicate(value: Symbol) -> str:
     if type(value) is not str:
         raise SoarRuntimeError(
-            f"non-string ({_kernel_shown(value)}) passed as 'pred' to - compute-dice-probability"
+            f"non-string ({kernel_shown(value)}) passed as 'pred' to - compute-dice-probability"
         )
     if value not in _DICE_PREDICATES:
         raise SoarRuntimeError(
-            f"invalid string ({_kernel_shown(value)}) passed as 'pred' to -"
-            " compute-dice-probability"
+            f"invalid string ({kernel_shown(value)}) passed as 'pred' to - compute-dice-probability"
         )
     return value
 
@@ -833,11 +972,11 @@ def _learning(name: str) -> RhsFunction:
     def call(ctx: RhsContext, args: Sequence[Symbol]) -> None:
         state = _one(name, args)
         if type(state) is not Identifier:
-            raise SoarRuntimeError(
-                f"non-identifier ({format_value(state)}) passed to {name} function."
+            raise FreshLineError(
+                f"non-identifier ({kernel_shown(state)}) passed to {name} function."
             )
         if not state.is_state:
-            raise SoarRuntimeError(f"identifier passed to {name} is not a state: {state}.")
+            raise FreshLineError(f"identifier passed to {name} is not a state: {state}.")
         return None
 
     return call
@@ -851,8 +990,8 @@ def _log(ctx: RhsContext, args: Sequence[Symbol]) -> None:
     the channel must be an integer from 1 to 100 (measured, message included)."""
     channel = args[0] if args else None
     if type(channel) is not int or not 1 <= channel <= _LOG_CHANNELS:
-        shown = "(none)" if channel is None else format_value(channel)
-        raise SoarRuntimeError(
+        shown = "(none)" if channel is None else kernel_shown(channel)
+        raise FreshLineError(
             "First argument of agent's (log) rhs-function must be an integer channel number"
             f" between 1 and {_LOG_CHANNELS}.  {shown} is invalid."
         )

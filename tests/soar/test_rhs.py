@@ -90,7 +90,7 @@ def test_int_and_float_types_are_kept() -> None:
         ("mod", (1.5, 2)),
         ("+", ("a", 1)),
         ("-", ()),
-        ("int", ("x",)),
+        ("int", ("99999999999999999999",)),  # (int x) is 0, as C's strtol reads it
     ],
 )
 def test_errors(name: str, args: tuple) -> None:
@@ -145,8 +145,10 @@ def test_round_off_matches_the_kernel(value, precision, printed: str) -> None:
 def test_round_off_below_a_tenth_rounds_where_the_kernel_returns_nan() -> None:
     assert format_value(call("round-off", 3.14159, 0.01)) == "3.140000"
     assert format_value(call("round-off", -1.2345, 0.05)) == "-1.250000"
-    with pytest.raises(SoarRuntimeError, match="zero"):
+    with pytest.raises(SoarRuntimeError, match="zero"):  # the kernel dies (SIGFPE)
         call("round-off", 5, 0)
+    assert format_value(call("round-off", 1.5, 0.0)) == "-nan"  # measured
+    assert call("round-off", "a", 10) == 0 and call("round-off", "a", 1.0) == 0.0  # measured
 
 
 @pytest.mark.parametrize(

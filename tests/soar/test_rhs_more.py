@@ -244,8 +244,10 @@ def test_round_off_heading_like_the_kernel(heading, precision, printed: str) -> 
 
 
 def test_round_off_heading_refuses_a_zero_precision_where_the_kernel_crashes() -> None:
-    with pytest.raises(SoarRuntimeError, match=r"\(round-off-heading\): precision"):
-        call("round-off-heading", 3, 0)
+    for precision in (0, "a"):  # the kernel reads a non-number as 0 and dies (SIGFPE)
+        with pytest.raises(SoarRuntimeError, match=r"^attempt to divide \('round-off-heading'\)"):
+            call("round-off-heading", 3, precision)
+    assert format_value(call("round-off-heading", 3, 0.0)) == "-nan"  # measured
     assert call("round-off-heading", 10**18 + 7, 1) == (10**18 + 7) % 360 - 360
 
 
