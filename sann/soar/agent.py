@@ -964,10 +964,14 @@ class Agent:
         return inst
 
     def _report_rhs_error(self, inst: Instantiation, error: SoarError) -> None:
-        """Like the kernel: report an action's error; the firing goes on without it."""
-        message = f"Error: production {inst.name}: {error}"
-        self.errors.append(message)
-        self._emit("\n" + message + "\n")
+        """Like the kernel: print ``Error: <text>`` and a newline where the output stands
+        (on a fresh line first for the errors that say so, `rhs.FreshLineError`), naming
+        no production; the firing goes on without the action. ``errors`` keeps the name."""
+        self.errors.append(f"Error: production {inst.name}: {error}")
+        if getattr(error, "fresh_line", False):
+            self._emit_line(f"Error: {error}\n")
+        else:
+            self._emit(f"Error: {error}\n")
 
     def _retract(self, inst: Instantiation) -> None:
         """Remove an instantiation's i-supported preferences (o-supported ones stay)."""
