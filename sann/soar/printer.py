@@ -7,6 +7,9 @@ identifier (consecutive conditions on the same identifier are grouped, negated o
 grouped the same way. Unlike the kernel we do not reorder conditions, and floats are printed
 with every digit they have (the kernel prints six decimals, which loses precision), so that
 ``parse(format_production(p)) == [p]`` for every production the parser can produce.
+The actions come in the kernel's order (the parser puts them so); the kernel gathers every
+make-action on one identifier into one group, we only consecutive ones, which keeps the
+order of the actions when the text is read back.
 """
 
 from __future__ import annotations

@@ -1,0 +1,148 @@
+"""Details of the Soar 9.6 kernel, measured in soar_sml and compared live, whole output.
+
+- The order of a production's actions: the kernel reorders them when it loads the rule
+  (reorder.cpp's ``reorder_action_list``): again and again it takes the first remaining
+  action that can run, one whose variables are bound (a make-action: its identifier and the
+  variables inside its function calls; a function-call action: all its variables). A taken
+  make-action binds every variable it holds. The kernel runs the actions in that order (what
+  is written, which errors come first, which new identifier gets which number, timetags)
+  and prints the rule in that order.
+"""
+
+from __future__ import annotations
+
+import io
+import re
+
+import pytest
+
+from sann.soar import agent as agent_module
+from sann.soar.agent import Agent
+from sann.soar.errors import SoarError
+
+HEAD = "sp {{p (state <s> ^superstate nil) --> {}}}"
+
+
+@pytest.fixture
+def kernel():
+    pytest.importorskip("soar_sml")
+    from differential import kernel
+
+    return kernel
+
+
+def ours(rules: list[str], commands: list[str]) -> list[str]:
+    """What our engine prints for each command (after loading the rules at watch 0)."""
+    out = io.StringIO()
+    agent = Agent(out=out)
+    for rule in rules:
+        agent.load(rule)
+    printed = []
+    for command in commands:
+        out.seek(0)
+        out.truncate()
+        agent.load(command)
+        printed.append(out.getvalue())
+    return printed
+
+
+def theirs(kernel, rules: list[str], commands: list[str]) -> list[str]:
+    """What the kernel prints for each command: its print events, then its result unless
+    the command is ``run`` (whose result is a summary our engine does not print)."""
+    printed = []
+    with kernel.KernelAgent() as ka:
+        for rule in rules:
+            ka.cmd(rule)
+        ka.cmd("watch 0")
+        ka.take_log()
+        for command in commands:
+            result = ka.cmd(command)
+            printed.append(ka.take_log() + ("" if command.startswith("run") else result))
+    return printed
+
+
+def same(kernel, rules: list[str], commands: list[str]) -> list[str]:
+    """Run the commands in both; the texts must agree (modulo blank lines after a print)."""
+    expected = theirs(kernel, rules, commands)
+    got = ours(rules, commands)
+    for command, mine, their in zip(commands, got, expected, strict=True):
+        if command.startswith("run"):
+            assert mine == their, command
+        elif not command.startswith("watch"):  # the kernel says what it watches now
+            assert mine.rstrip("\n") == their.rstrip("\n"), command
+    return expected
+
+
+# --------------------------------------------------------------------- 1. action order
+
+# Actions of HEAD; each needs the kernel's order to print, number or timestamp as it does.
+ORDERS = [
+    "(write 1) (<s> ^a (+ a <new>)) (write 2) (<s> ^b <new>)",
+    "(write 1) (<s> ^a (+ a (+ 1 <new>))) (write 2) (<s> ^b <new>) (write 3)",
+    "(write 1 <new>) (write 2) (<s> ^b <new>)",
+    "(write (concat (+ 1 <q>) x)) (<s> ^q <q>)",
+    "(<s> ^c 1) (<s> ^a (concat <n> x)) (<s> ^b <n>) (<s> ^d 2) (<s> ^e (concat <m> y))"
+    " (<s> ^f <m>)",
+    "(<s> ^a (concat <n1> x)) (<s> ^b <n2>) (<s> ^c <n1>)",
+    "(<s> ^a (concat <y> 1)) (<s> ^<y> 2)",
+    "(<n> ^x (concat <s> 1)) (write <n>) (<s> ^n <n>)",
+    "(<b> ^v 1) (write b) (<a> ^b <b>) (write a) (<s> ^a <a>)",
+    "(<s> ^a <n>) (<n> ^b (concat <m> 1)) (<n> ^c <m>) (<m> ^d (make-constant-symbol <n>))",
+    "(<s> ^operator <o> +) (<o> ^name (concat x <q>)) (<s> ^q <q>) (<o> ^r <q>)",
+    "(<s> ^a <n> ^b (concat <n> 1)) (write (crlf) |x| <n>)",
+]
+
+_WM_LINE = re.compile(r"=>WM: \((\d+): [^)]*\)")
+
+
+def wm_lines(trace: str) -> list[str]:
+    """The ``=>WM:`` lines of a watch-4 trace by timetag (the kernel prints each wave's
+    newest first, we oldest first; the timetags are what is compared)."""
+    lines = [m.group(0) for m in _WM_LINE.finditer(trace)]
+    return sorted(lines, key=lambda line: int(_WM_LINE.match(line).group(1)))  # type: ignore[union-attr]
+
+
+@pytest.mark.parametrize("actions", ORDERS)
+def test_actions_run_and_print_in_the_kernels_order(kernel, actions: str) -> None:
+    rules = [HEAD.format(actions)]
+    commands = ["print p", "watch 1", "run 2", "print --depth 3 s1"]
+    same(kernel, rules, commands)
+
+
+@pytest.mark.parametrize("actions", ORDERS)
+def test_timetags_follow_the_kernels_order(kernel, actions: str) -> None:
+    rules = [HEAD.format(actions)]
+    commands = ["watch 4", "run 1"]
+    expected = theirs(kernel, rules, commands)[1]
+    assert wm_lines(ours(rules, commands)[1]) == wm_lines(expected)
+    assert len(wm_lines(expected)) > 3
+
+
+def test_the_first_example_prints_as_the_kernel(kernel) -> None:
+    rules = [HEAD.format(ORDERS[0])]
+    printed = same(kernel, rules, ["run 1", "print p"])
+    assert printed[0] == "12Error: non-number (a) passed to + function\n"
+    assert "(write 1)\n    (write 2)\n    (<s> ^b <new> ^a (+ a <new>))\n}" in printed[1]
+
+
+@pytest.mark.parametrize("compile_after", [1, 10**9])
+def test_compiled_actions_keep_the_kernels_order(
+    kernel, monkeypatch: pytest.MonkeyPatch, compile_after: int
+) -> None:
+    monkeypatch.setattr(agent_module, "COMPILE_AFTER", compile_after)
+    rules = [
+        "sp {propose (state <s> ^n <n> < 5) --> (<s> ^operator <o> +) (<o> ^name inc)}",
+        "sp {inc (state <s> ^operator <o> ^n <n>) (<o> ^name inc) --> (write |[| <n>)"
+        " (<s> ^n <n> - (+ <n> 1)) (<s> ^m (+ <new> <n>)) (<s> ^k <new>) (write |]|)}",
+        "sp {init (state <s> ^superstate nil) --> (<s> ^n 0)}",
+    ]
+    printed = same(kernel, rules, ["watch 1", "run 8", "print inc", "print --depth 2 s1"])
+    assert "(inc)[0Error: non-number (N1) passed to + function\n]\n" in printed[1]
+
+
+def test_an_action_that_can_never_run_is_refused_by_both(kernel) -> None:
+    rule = HEAD.format("(<s> ^<x> (concat <y> 1)) (<s> ^<y> (concat <x> 1))")
+    with kernel.KernelAgent() as ka, pytest.raises(RuntimeError, match="ungrounded action"):
+        ka.cmd(rule)
+    with pytest.raises(SoarError, match="neither tested"):
+        Agent().load(rule)
