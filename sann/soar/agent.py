@@ -51,7 +51,7 @@ from .production import (
 )
 from .rete import KernelOrder, negation_matches
 from .rhs import FUNCTIONS, format_value, kernel_random
-from .trace import print_identifier, trace_preference, trace_wme
+from .trace import print_identifier, symbol_text, trace_preference, trace_wme
 
 PHASES = ("input", "propose", "decide", "apply", "output")
 
@@ -1480,7 +1480,7 @@ class Agent:
         self._operator_names.append(name if name is not None else "?")
         if self.trace_level >= 1:
             indent = " " + "   " * goal.level
-            label = f" ({format_value(name)})" if name is not None else ""
+            label = f" ({symbol_text(name)})" if name is not None else ""
             self._emit(f"\n{self._decisions + 1:>6}:{indent}O: {format_value(value)}{label}")
 
     def _operator_name(self, value: Symbol) -> Symbol | None:

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import re
 
+from sann.soar.memory import format_symbol
 from sann.soar.production import (
     Action,
     CallAction,
@@ -45,31 +46,22 @@ __all__ = [
     "format_test",
 ]
 
-_C = r"A-Za-z0-9$%&*+\-/:<=>?_@"
-_SYMBOL = re.compile(rf"[{_C}]+")
-# Runs that Soar's lexer reads as something other than a symbol: numbers, identifiers,
-# variables and the relation / preference / arrow signs.
-_NOT_A_SYMBOL = re.compile(
-    r"[+-]?\d+|[+-]?(\d+\.\d*|\.\d+)([eE][+-]?\d*)?|[A-Za-z]\d+|<.+>"
-    r"|-->|[-+<>=@&]|<>|<=|>=|<=>|<<|>>"
-)
 _KEYWORDS = ("state", "impasse")
 INDENT = "    "
 
 
 def format_constant(value: str | int | float, keyword_safe: bool = False) -> str:
-    """A constant as Soar reads it back: ``|...|`` where a bare symbol would be read as a
-    number, identifier, variable or sign; floats always with a decimal point."""
+    """A constant as Soar reads it back: a string as the kernel prints it
+    (`memory.string_needs_bars`), floats always with a decimal point and every digit."""
     if isinstance(value, bool):
         raise TypeError(f"Soar has no boolean constants: {value!r}")
     if isinstance(value, int):
         return str(value)
     if isinstance(value, float):
         return _format_float(value)
-    bare = _SYMBOL.fullmatch(value) and not _NOT_A_SYMBOL.fullmatch(value)
-    if bare and not (keyword_safe and value in _KEYWORDS):
-        return value
-    return "|" + value.replace("\\", "\\\\").replace("|", "\\|") + "|"
+    if keyword_safe and value in _KEYWORDS:
+        return f"|{value}|"
+    return format_symbol(value)
 
 
 def _format_float(value: float) -> str:

@@ -36,7 +36,7 @@ from fractions import Fraction
 from typing import Any, Protocol
 
 from .errors import SoarRuntimeError
-from .memory import WME, Identifier, Symbol
+from .memory import WME, Identifier, Symbol, float_text
 from .preferences import Preference
 from .printer import format_constant
 
@@ -77,13 +77,8 @@ def format_value(value: Symbol) -> str:
     return str(value)
 
 
-def _format_float(value: float) -> str:
-    """C's ``%f``: a NaN with its sign bit set is ``-nan`` (measured: ``(sqrt -1)``)."""
-    if math.isinf(value):
-        return "inf" if value > 0 else "-inf"
-    if math.isnan(value):
-        return "-nan" if math.copysign(1.0, value) < 0 else "nan"
-    return f"{value:f}"
+#: C's ``%f``: a NaN with its sign bit set is ``-nan`` (measured: ``(sqrt -1)``).
+_format_float = float_text
 
 
 #: The NaN x86 makes of an invalid operation (``sqrt(-1)``, ``inf * 0``): sign bit set.

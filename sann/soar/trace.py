@@ -18,9 +18,8 @@ COLUMNS = 80
 
 
 def symbol_text(value: Symbol) -> str:
-    """A symbol as ``print`` shows it: floats as ``%f``, odd strings in bars."""
-    if isinstance(value, float):
-        return f"{value:f}"
+    """A symbol as ``print`` shows it: floats as ``%f``, odd strings in bars
+    (`memory.format_symbol`)."""
     return format_symbol(value)
 
 

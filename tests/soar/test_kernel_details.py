@@ -7,6 +7,11 @@
   make-action binds every variable it holds. The kernel runs the actions in that order (what
   is written, which errors come first, which new identifier gets which number, timetags)
   and prints the rule in that order.
+- How symbols are printed in working memory, traces and messages: a float as ``%f`` with
+  the sign of a NaN (``-nan``); a string in vertical bars when it is empty, holds a
+  character that is not a constituent (letters, digits, ``$%&*+-/:<=>?_@``), reads as an
+  integer, identifier or variable, or is shorter than four characters with a constituent
+  that is not a letter or digit (``*`` alone excepted).
 """
 
 from __future__ import annotations
@@ -146,3 +151,46 @@ def test_an_action_that_can_never_run_is_refused_by_both(kernel) -> None:
         ka.cmd(rule)
     with pytest.raises(SoarError, match="neither tested"):
         Agent().load(rule)
+
+
+# --------------------------------------------------------------------- 2. printed symbols
+
+# Values written by a rule, and what the kernel prints for each (measured).
+SYMBOLS = [
+    ("(sqrt -1)", "-nan"), ("(- (sqrt -1))", "nan"), ("(float |inf|)", "inf"),
+    ("(float |-inf|)", "-inf"), ("-0.0", "-0.000000"), ("1.5", "1.500000"),
+    ("(concat S1 1.5)", "|S11.500000|"), ("|S11.5000001|", "|S11.5000001|"), ("|S1|", "|S1|"),
+    ("|s1|", "|s1|"), ("|z99999999999999999999|", "|z99999999999999999999|"),
+    ("|S1a|", "S1a"), ("|AB1|", "AB1"), ("|1|", "|1|"), ("|-1|", "|-1|"), ("|+1|", "|+1|"),
+    ("|00|", "|00|"), ("|1.5|", "|1.5|"), ("|1.|", "|1.|"), ("|.5|", "|.5|"),
+    ("|1e5|", "1e5"), ("|1e+|", "|1e+|"), ("|1e-7|", "1e-7"), ("|0x10|", "0x10"),
+    ("|<x>|", "|<x>|"), ("|<x|", "|<x|"), ("|x>|", "|x>|"), ("|<abcd|", "<abcd"),
+    ("|<ab>c|", "<ab>c"), ("|a b|", "|a b|"), ("|A|", "A"), ("|a-b|", "|a-b|"),
+    ("|a-bc|", "a-bc"), ("|-->|", "|-->|"), ("|--->|", "--->"), ("|<=>a|", "<=>a"),
+    ("|*|", "*"), ("|**|", "|**|"), ("|***|", "|***|"), ("|****|", "****"), ("|$|", "|$|"),
+    ("|a_b|", "|a_b|"), ("|a_bc|", "a_bc"), ("|@|", "|@|"), ("|^|", "|^|"), ("|a.b|", "|a.b|"),
+    ("|a,bcd|", "|a,bcd|"), ("|é|", "|é|"), ("||", "||"), ("|a\\|b|", "|a\\|b|"),
+    ("|a\\\\b|", "|a\\\\b|"), ("|state|", "state"), ("|nan|", "nan"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("value", "printed"), SYMBOLS)
+def test_symbols_print_as_the_kernels(kernel, value: str, printed: str) -> None:
+    rules = [HEAD.format(f"(<s> ^operator <o> + ^v {value}) (<o> ^name {value} ^{value} 1)")]
+    output = same(kernel, rules, ["watch 1", "run 1", "print --depth 2 s1"])
+    assert f"O: O1 ({printed})" in output[1]
+    assert f" ^v {printed}" in output[2].replace("\n      ", "")
+    assert f" ^{printed} 1" in output[2].replace("\n      ", "")
+    expected = theirs(kernel, rules, ["watch 4", "run 1"])[1]
+    assert wm_lines(ours(rules, ["watch 4", "run 1"])[1]) == wm_lines(expected)
+    assert f"^v {printed})" in expected
+
+
+def test_an_error_shows_a_string_as_the_kernel(kernel) -> None:
+    rules = [HEAD.format("(<s> ^r (+ |a-b| 1) ^q (- |1e5|) ^t (* |x.y|))")]
+    printed = same(kernel, rules, ["run 1"])
+    assert printed[0] == (
+        "Error: non-number (|a-b|) passed to + function\n"
+        "Error: non-number (1e5) passed to - function\n"
+        "Error: non-number (|x.y|) passed to * function\n"
+    )
