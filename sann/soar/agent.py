@@ -714,7 +714,9 @@ class Agent:
         for inst in retractions:
             self._retract(inst)
         if self.trace_level >= 2 and goal is not None and self._phase == "apply":
-            self._emit_line(f"\t--- Change Working Memory ({firing}) ---\n")
+            # Not on a fresh line: after a write that did not end its line, the kernel
+            # goes on on the same line (measured: "applied\t--- Change Working Memory").
+            self._emit(f"\t--- Change Working Memory ({firing}) ---\n")
         self._working_memory_phase()
         self._collect_changes()
 

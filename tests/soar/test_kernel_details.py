@@ -12,6 +12,8 @@
   character that is not a constituent (letters, digits, ``$%&*+-/:<=>?_@``), reads as an
   integer, identifier or variable, or is shorter than four characters with a constituent
   that is not a letter or digit (``*`` alone excepted).
+- The watch-2 line ``\t--- Change Working Memory (PE) ---`` goes on the line a ``write``
+  left unfinished (``applied\t--- Change Working Memory (PE) ---``).
 """
 
 from __future__ import annotations
@@ -194,3 +196,32 @@ def test_an_error_shows_a_string_as_the_kernel(kernel) -> None:
         "Error: non-number (1e5) passed to - function\n"
         "Error: non-number (|x.y|) passed to * function\n"
     )
+
+
+# ----------------------------------------------------- 4. phase headers after a write
+
+# Writes that do not end their line, in the application phase of the top state and of a
+# substate (an operator no-change impasse).
+WRITING_AGENT = [
+    "sp {propose (state <s> ^superstate nil -^done) --> (<s> ^operator <o> +) (<o> ^name go)"
+    " (write |prop|)}",
+    "sp {apply (state <s> ^operator.name go) --> (<s> ^done t) (write |applied|)}",
+    "sp {elab (state <s> ^done t) --> (write |elab|)}",
+    "sp {out (state <s> ^done t ^io.output-link <ol>) --> (<ol> ^x 1) (write |out| (crlf))}",
+    "sp {sub*propose (state <s> ^superstate <ss>) (<ss> ^operator.name stay -^result)"
+    " --> (<s> ^operator <o> +) (<o> ^name inner)}",
+    "sp {sub*apply (state <s> ^operator.name inner ^superstate <ss>) --> (<ss> ^result 1)"
+    " (write |inner|)}",
+    "sp {top*stay (state <s> ^superstate nil ^done t) --> (<s> ^operator <o> +) (<o> ^name stay)}",
+    "sp {top*result (state <s> ^result 1) --> (write |result|)}",
+]
+
+
+@pytest.mark.parametrize("watch", [1, 2, 3])
+def test_phase_headers_after_a_partial_line_agree_with_the_kernel(kernel, watch: int) -> None:
+    printed = same(kernel, WRITING_AGENT, [f"watch {watch}", "run 6", "print --depth 2 s1"])
+    if watch >= 2:
+        assert "applied\t--- Change Working Memory (PE) ---\n" in printed[1]
+        assert "inner\t--- Change Working Memory (PE) ---\n" in printed[1]
+    if watch == 2:
+        assert "elabout\n\t--- Change Working Memory (IE) ---\n" in printed[1]
