@@ -309,6 +309,7 @@ class Agent:
         if decisions is not None and decisions < 0:
             raise SoarRuntimeError(f"run: decision count must be >= 0, got {decisions}")
         self._stop = False
+        self._halt_note = ""
         target = None if decisions is None else self._decisions + decisions
         if decisions == 0:
             return self.stats
@@ -316,9 +317,24 @@ class Agent:
             self._run_phase()
             if target is not None and self._decisions >= target and self._phase == "apply":
                 break
-        if self._stop and not self._halted and self.trace_level >= 1:
-            self._emit("Interrupt received.")  # at the end of the phase, as the kernel
+        self._stopped_message(target)
         return self.stats
+
+    def _stopped_message(self, target: int | None) -> None:
+        """What the kernel prints, at every watch level, when a run stops at the end of the
+        phase a halt or an interrupt happened in (measured in soar_sml): after a halt
+        '\nSystem halted.\nInterrupt received.This Agent halted.' (once: a later run
+        prints nothing); after the goal stack grew too deep '\nSystem halted.\nInterrupt
+        received.Interrupt received.'; after an interrupt 'Interrupt received.', preceded
+        by '\n\n' when the run has no decision limit or the interrupt came in the decision
+        that was to be the run's last."""
+        if self._halt_note:
+            self._emit("\nSystem halted.\nInterrupt received." + self._halt_note)
+            self._halt_note = ""
+        elif self._stop and not self._halted:
+            current = self._decisions + (1 if self._phase in ("propose", "decide") else 0)
+            last = target is None or current == target
+            self._emit(("\n\n" if last else "") + "Interrupt received.")
 
     def step(self) -> dict[str, int]:
         """One decision cycle (stopping before the next apply phase, like ``run 1``)."""
@@ -367,8 +383,8 @@ class Agent:
         self._emit(text)
 
     def request_halt(self) -> None:
-        if not self._halted and self.trace_level >= 1:
-            self._emit_line("System halted.\n")
+        if not self._halted:
+            self._halt_note = "This Agent halted."  # printed when the run stops
         self._halted = True
         self._stop = True
 
@@ -435,6 +451,7 @@ class Agent:
         self._wm_max = 0
         self._halted = False
         self._stop = False
+        self._halt_note = ""
         self._phase = "input"
         self._active: Goal | None = None
         self._active_type = ""
@@ -630,8 +647,13 @@ class Agent:
                 self._emit(f"\nWarning: reached max-elaborations; proceeding to {end} phase.")
                 self._end_phase(apply, end)
                 return
-            if self._halted:
-                return  # an interrupt (_stop) lets the phase finish, as in the kernel
+            if self._halted:  # an interrupt (_stop) lets the phase finish, as in the kernel
+                if self.trace_level >= 2:
+                    self._emit(
+                        "\n--- END Application Phase ---\n" if apply
+                        else "\n--- END Propose Phase ---\n"
+                    )
+                return
 
     def _end_phase(self, apply: bool, end: str) -> None:
         if self.trace_level >= 2:
@@ -1502,14 +1524,14 @@ class Agent:
     ) -> None:
         if goal.level >= self.max_goal_depth:
             # The kernel's guard against runaway subgoaling: say so, make the state, stop.
-            # It prints "System halted." but only interrupts: a later run goes on (measured).
+            # It prints "System halted." (when the run stops) but only interrupts: a later
+            # run goes on (measured).
             self._emit(
                 f"\nGoal stack depth exceeded {self.max_goal_depth} on a {impasse} impasse."
                 "\nSoar appears to be in an infinite loop.  \nContinuing to subgoal may cause"
                 " Soar to \nexceed the program stack of your system.\n"
             )
-            if self.trace_level >= 1:
-                self._emit_line("System halted.\n")
+            self._halt_note = self._halt_note or "Interrupt received."
             self.request_interrupt()
         ident = self._ids.new("S", level=goal.level + 1)
         sub = self._new_goal(ident, goal)

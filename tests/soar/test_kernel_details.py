@@ -225,3 +225,46 @@ def test_phase_headers_after_a_partial_line_agree_with_the_kernel(kernel, watch:
         assert "inner\t--- Change Working Memory (PE) ---\n" in printed[1]
     if watch == 2:
         assert "elabout\n\t--- Change Working Memory (IE) ---\n" in printed[1]
+
+
+# ------------------------------------------------- 5. halt and interrupt messages
+
+# The kernel prints its stop messages at every watch level, when the run stops at the end of
+# the phase: '\nSystem halted.\nInterrupt received.This Agent halted.' after (halt), once;
+# 'Interrupt received.' after (interrupt), after '\n\n' when the run has no decision limit
+# or the interrupt came in its last decision; the goal-depth guard's message, then
+# '\nSystem halted.\nInterrupt received.Interrupt received.'.
+PROPOSE_GO = "sp {prop (state <s> ^superstate nil) --> (<s> ^operator <o> +) (<o> ^name go)}"
+IN_SUBSTATE = "sp {s (state <s> ^superstate <ss>) (<ss> ^superstate nil) --> {}}"
+STOPPING = {
+    "halt": [HEAD.format("(write |bye|) (halt)")],
+    "halt-crlf": [HEAD.format("(write |bye| (crlf)) (halt)")],
+    "interrupt": [HEAD.format("(write |bye|) (interrupt)")],
+    "halt-interrupt": [HEAD.format("(write |bye|) (interrupt) (halt)")],
+    "two-halts": [HEAD.format("(write |bye|) (halt)"), HEAD.replace("{p ", "{q ").format("(halt)")],
+    "apply-halt": [PROPOSE_GO, "sp {app (state <s> ^operator.name go) --> (write |a|) (halt)}"],
+    "apply-interrupt": [
+        PROPOSE_GO, "sp {app (state <s> ^operator.name go) --> (write |a|) (interrupt)}"
+    ],
+    "substate-halt": [IN_SUBSTATE.replace("{}", "(write |sub|) (halt)")],
+    "substate-interrupt": [IN_SUBSTATE.replace("{}", "(write |sub|) (interrupt)")],
+    "goal-depth": ["max-goal-depth 3"],
+    "nothing": [],
+}
+RUNS = [["run 5", "run 1"], ["run 1", "run 5"], ["run 2", "run 1"], ["run"]]
+
+
+@pytest.mark.parametrize("runs", RUNS, ids=" ".join)
+@pytest.mark.parametrize("watch", [0, 1, 2])
+@pytest.mark.parametrize("case", list(STOPPING))
+def test_halt_and_interrupt_messages_agree_with_the_kernel(
+    kernel, case: str, watch: int, runs: list[str]
+) -> None:
+    if case == "nothing" and "run" in runs:
+        pytest.skip("runs forever")
+    printed = same(kernel, STOPPING[case], [f"watch {watch}", *runs])
+    if case == "halt" and watch < 2:
+        assert printed[1] == "bye\nSystem halted.\nInterrupt received.This Agent halted."
+        assert printed[2:] in ([], [""])
+    if case == "interrupt" and watch == 0 and runs == ["run 5"]:
+        assert printed[1] == "byeInterrupt received."

