@@ -95,7 +95,9 @@ def test_counter_matches_kernel_figures(matcher) -> None:
         14,
     )
     assert (stats["wme_changes"], stats["wm_size"]) == (55, 19)
-    assert out.getvalue() == "count 0\ncount 1\ncount 2\n"
+    assert out.getvalue() == (
+        "count 0\ncount 1\ncount 2\n" "\nSystem halted.\nInterrupt received.This Agent halted."
+    )
     assert agent.operator_sequence == ["init", "inc", "inc", "inc", "stop"]
     assert agent.print("S1", 1).startswith(
         "(S1 ^count 3 ^double 6 ^epmem E1 ^io I1 ^name count ^operator O5\n"

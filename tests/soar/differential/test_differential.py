@@ -24,6 +24,9 @@ from .kernel import (
     split_trace,
 )
 
+# What the kernel (and our engine) prints when (halt) stops a run, at every watch level.
+HALTED = "\nSystem halted.\nInterrupt received.This Agent halted."
+
 HERE = Path(__file__).parent
 ROOT = HERE.parents[2]
 AGENTS = sorted((HERE / "agents").glob("*.soar")) + [
@@ -76,14 +79,16 @@ def test_kernel_is_reproducible(path: Path, kernel_results: dict[Path, RunResult
 def test_known_figures_of_the_rule_files(kernel_results: dict[Path, RunResult]) -> None:
     jug = kernel_results[ROOT / "rules" / "water-jug.soar"]
     assert jug.decisions == 9
-    assert jug.output.endswith("The problem has been solved.\n\nSystem halted.\nInterrupt received.This Agent halted.")
+    assert jug.output.endswith("The problem has been solved.\n" + HALTED)
     hanoi = kernel_results[ROOT / "rules" / "hanoi.soar"]
     assert hanoi.decisions == 1 + 6 + 63 + 1
     assert hanoi.operators.count("move-disk") == 63
-    assert hanoi.output == "Moved 6 disks from peg a to peg c in 63 moves.\n"
+    assert hanoi.output == (
+        "Moved 6 disks from peg a to peg c in 63 moves.\n" + HALTED
+    )
     full = run_kernel(ROOT / "rules" / "hanoi.soar")
     assert full.decisions == 2060
-    assert full.output == "Moved 11 disks from peg a to peg c in 2047 moves.\n"
+    assert full.output == "Moved 11 disks from peg a to peg c in 2047 moves.\n" + HALTED
 
 
 @pytest.mark.parametrize("path", AGENTS, ids=_id)
@@ -162,7 +167,7 @@ def test_split_trace_separates_written_output() -> None:
     )
     operators, output = split_trace(trace)
     assert operators == ["hello", "evaluate"]
-    assert output == "Hi hello\nx\nSystem halted.\nInterrupt received.This Agent halted."
+    assert output == "Hi hello\nx" + HALTED
 
 
 def _canon(text: str):
@@ -248,4 +253,4 @@ def test_source_time_output_is_dropped_on_both_sides(tmp_path: Path) -> None:
         "sp {stop\n   (state <s> ^operator.name go)\n-->\n   (write |ran|)\n   (halt)}\n"
     )
     theirs, ours = run_kernel(agent), run_ours(agent)
-    assert theirs.output == ours.output == "ran\nSystem halted.\nInterrupt received.This Agent halted."
+    assert theirs.output == ours.output == "ran" + HALTED
