@@ -327,14 +327,23 @@ class Agent:
         prints nothing); after the goal stack grew too deep '\nSystem halted.\nInterrupt
         received.Interrupt received.'; after an interrupt 'Interrupt received.', preceded
         by '\n\n' when the run has no decision limit or the interrupt came in the decision
-        that was to be the run's last."""
+        that was to be the run's last. 'Interrupt received.' and 'This Agent halted.' do not
+        move the kernel's output column (measured by where a later print wraps)."""
         if self._halt_note:
-            self._emit("\nSystem halted.\nInterrupt received." + self._halt_note)
+            self._emit("\nSystem halted.\n")
+            self._emit_uncounted("Interrupt received." + self._halt_note)
             self._halt_note = ""
         elif self._stop and not self._halted:
             current = self._decisions + (1 if self._phase in ("propose", "decide") else 0)
-            last = target is None or current == target
-            self._emit(("\n\n" if last else "") + "Interrupt received.")
+            if target is None or current == target:
+                self._emit("\n\n")
+            self._emit_uncounted("Interrupt received.")
+
+    def _emit_uncounted(self, text: str) -> None:
+        """Text the kernel prints without counting it in its output column."""
+        column = self._column
+        self._emit(text)
+        self._column = column
 
     def step(self) -> dict[str, int]:
         """One decision cycle (stopping before the next apply phase, like ``run 1``)."""

@@ -268,3 +268,17 @@ def test_halt_and_interrupt_messages_agree_with_the_kernel(
         assert printed[2:] in ([], [""])
     if case == "interrupt" and watch == 0 and runs == ["run 5"]:
         assert printed[1] == "byeInterrupt received."
+
+
+WIDE = "sp {wide (state <s> ^superstate nil) --> (<s> " + " ".join(
+    f"^attribute{i} value{i}" for i in range(12)) + ")}"
+
+
+@pytest.mark.parametrize("runs", [["run 5"], ["run 1"], ["run"]], ids=" ".join)
+@pytest.mark.parametrize("case", ["halt", "halt-crlf", "interrupt", "apply-halt"])
+def test_a_print_after_a_stop_wraps_where_the_kernels_does(kernel, case: str, runs) -> None:
+    """'Interrupt received.' and 'This Agent halted.' leave the kernel's output column where
+    it was, so a print after them wraps as if they were not there."""
+    if case == "halt-crlf" and runs == ["run"]:
+        pytest.skip("same as halt")
+    same(kernel, [WIDE, *STOPPING[case]], [*runs, "print --depth 1 S1"])
