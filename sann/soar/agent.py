@@ -821,7 +821,7 @@ class Agent:
             self._retract_matches(gone, self.matcher.blocked_retractions)
         if new:
             if len(new) > 1 and not in_match_order:
-                new = sorted(new, key=self._kernel_key)
+                new = self._kernel_sorted(new, new)
             self._queue_matches(new)
 
     def _retract_matches(self, gone: list, blocked: int = -1) -> None:
@@ -858,9 +858,10 @@ class Agent:
                             break
                     else:
                         made.append(inst)
-            key = self._kernel_key
-            made.sort(key=lambda inst: key(inst.match), reverse=True)
-            removed.sort(key=lambda inst: key(inst.match), reverse=True)
+            if len(made) > 1:
+                made = self._kernel_sorted(made, [inst.match for inst in made], True)
+            if len(removed) > 1:
+                removed = self._kernel_sorted(removed, [inst.match for inst in removed], True)
             fired = made + removed
         for inst in fired:
             self._schedule_retraction(inst)
@@ -917,6 +918,24 @@ class Agent:
             return (newest, 0, 0)
         return (newest, info.cond_masks[index] if index >= 0 else 0, -info.load_index)
 
+    def _kernel_sorted(self, items: list, matches: list, newest_first: bool = False) -> list:
+        """``items`` (stable) sorted by the ``_kernel_key`` of their ``matches``.  The key's
+        first part, the newest WME, is all there is to compare when the matches' newest
+        WMEs differ (the usual pair): the rest of the key is made only when needed."""
+        if len(items) == 2:
+            first, second = matches
+            one, two = first.newest[0], second.newest[0]
+            if one == two:
+                one, two = self._kernel_key(first), self._kernel_key(second)
+            if (one < two) if newest_first else (two < one):
+                return [items[1], items[0]]
+            return items
+        keys = [match.newest[0] for match in matches]
+        if len(set(keys)) < len(keys):
+            keys = [self._kernel_key(match) for match in matches]
+        order = sorted(range(len(items)), key=keys.__getitem__, reverse=newest_first)
+        return [items[k] for k in order]
+
     def _kernel_key(self, match: object) -> tuple[int, ...]:
         """The order the kernel's Rete makes new matches in: by the newest matched WME, then
         by the alpha memory it entered (``(* ^attr *)`` before ``(* ^attr value)``) and the
@@ -924,30 +943,26 @@ class Agent:
         matched by several conditions makes the match in the last alpha memory it enters,
         at the first of them in the kernel's order."""
         newest, index = match.newest  # type: ignore[attr-defined]
-        name = match.production.name  # type: ignore[attr-defined]
-        places = self._kernel_places.get(name)
-        if places is None or index < 0:
+        places = self._kernel_places.get(match.production.name)  # type: ignore[attr-defined]
+        if places is None:
             return (newest,)
         place = places.get(index)
-        masks = self._productions[name].cond_masks
-        mask = masks[index]
-        wmes = match.wmes  # type: ignore[attr-defined]
-        wme = wmes[index]
-        for j, other in enumerate(wmes):
-            if other is wme and j != index:
-                other_place = places.get(j)
-                if other_place is not None and (
-                        place is None or masks[j] > mask
-                        or (masks[j] == mask and other_place[0] < place[0])):
-                    mask, place = masks[j], other_place
         if place is None:
-            return (newest, mask)
+            return (newest,)
+        wmes = match.wmes  # type: ignore[attr-defined]
+        if place[4]:  # the WME may be in other conditions too
+            wme = wmes[index]
+            for j in place[4]:
+                if wmes[j] is wme:
+                    other = places[j]
+                    if other[0] > place[0] or (other[0] == place[0] and other[5] < place[5]):
+                        place = other
         linked = place[2]  # when its join was made, or relinked (see KernelOrder)
         for j in place[1]:
-            other = wmes[j]
-            if other is not None and other.timetag > linked:
-                linked = other.timetag
-        return (newest, mask, linked, *place[3])
+            other_wme = wmes[j]
+            if other_wme is not None and other_wme.timetag > linked:
+                linked = other_wme.timetag
+        return (newest, place[0], linked, place[3])
 
     def _schedule_retraction(self, inst: Instantiation) -> None:
         if inst.retracted:

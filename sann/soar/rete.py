@@ -2586,6 +2586,14 @@ class _KernelNode:
 _KERNEL_VAR = re.compile(r"<[^<>\s]+>")
 
 
+def _same_alpha(one: Condition, other: Condition) -> bool:
+    """Whether one WME may match both conditions (in one alpha memory or two)."""
+    if one.acceptable != other.acceptable:
+        return False
+    a, b = one.attr_test, other.attr_test
+    return not (type(a) is Const and type(b) is Const and not same_symbol(a.value, b.value))
+
+
 class KernelOrder:
     """The kernel's node tree for the loaded productions (see above).  ``add`` gives, per
     written condition index of a positive condition, ``(kernel position, written indexes
@@ -2652,12 +2660,19 @@ class KernelOrder:
         path.append((node, ("p", production.name), pnode))
         self._paths[production.name] = path
         below = [-step[2].serial for step in path]
-        places: dict[int, tuple[int, tuple[int, ...], int, tuple[int, ...]]] = {}
+        conditions = production.conditions
+        places: dict[int, tuple] = {}
         for k, (index, position, length) in enumerate(joins):
             if index not in places:
                 join = path[length - 1][2]
                 before = tuple(dict.fromkeys(j[0] for j in joins[:k]))
-                places[index] = (position, before, join.born, (join.serial, *below[length:]))
+                cond = conditions[index]
+                mask = ((2 if type(cond.attr_test) is Const else 0)  # type: ignore[union-attr]
+                        | (4 if type(cond.value_test) is Const else 0))  # type: ignore[union-attr]
+                twins = tuple(j for j, _, _ in joins if j != index
+                              and _same_alpha(cond, conditions[j]))  # type: ignore[arg-type]
+                places[index] = (mask, before, join.born, (join.serial, *below[length:]),
+                                 twins, position)
         self._places[production.name] = places  # shared with the caller: see restart
         return places
 
@@ -2669,8 +2684,8 @@ class KernelOrder:
             node.born = 0
             stack.extend(node.children.values())
         for places in self._places.values():
-            for index, (position, before, _, key) in list(places.items()):
-                places[index] = (position, before, 0, key)
+            for index, (mask, before, _, key, twins, position) in list(places.items()):
+                places[index] = (mask, before, 0, key, twins, position)
 
     def remove(self, name: str) -> None:
         self._places.pop(name, None)
