@@ -147,6 +147,23 @@ def train_seeds(
     return results
 
 
+def train_baseline_and_sann(
+    make_net: Callable[[int], nn.Module],
+    data,
+    fused: tuple[np.ndarray, np.ndarray],
+    seeds: Sequence[int],
+    config: TrainConfig,
+    baseline: str,
+) -> list[dict[str, TrainResult]]:
+    """The paper's comparison on one dataset: the net on ``data``'s features (named
+    ``baseline``) and SANN, the same net on the ``fused`` (train, test) features with the
+    logical item, each net kind's seeds trained together; one pair per seed."""
+    plain = train_seeds(make_net, data.X_train, data.y_train, data.X_test, data.y_test, seeds,
+                        config)
+    sann = train_seeds(make_net, fused[0], data.y_train, fused[1], data.y_test, seeds, config)
+    return [{baseline: a, "sann": b} for a, b in zip(plain, sann, strict=True)]
+
+
 #: Layers that act on each number alone: the same module serves every stacked net.
 ELEMENTWISE = (nn.Tanh, nn.ReLU, nn.Sigmoid, nn.Identity)
 

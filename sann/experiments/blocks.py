@@ -17,7 +17,7 @@ from threadpoolctl import threadpool_limits
 
 from sann.nets import ShallowNet
 from sann.tasks.blocks import make_dataset
-from sann.train import TrainConfig, TrainResult, summarise, train_seeds
+from sann.train import TrainConfig, TrainResult, summarise, train_baseline_and_sann
 from sann.viz import plots
 
 KINDS = ("D1", "D2")
@@ -57,13 +57,10 @@ def train_pair(data, config: BlocksExperiment, seed: int) -> dict[str, TrainResu
 def train_pairs(data, config: BlocksExperiment, seeds: list[int]) -> list[dict[str, TrainResult]]:
     """Train the standard ANN and SANN on one dataset with every seed (each net kind's seeds
     are trained together, see `train_seeds`); one {"ann", "sann"} pair per seed."""
-    make = lambda n: ShallowNet(n, hidden=config.hidden)  # noqa: E731
-    ann = train_seeds(make, data.X_train, data.y_train, data.X_test, data.y_test, seeds,
-                      config.train)
-    sann = train_seeds(make, with_logical(data.X_train, data.logical_train), data.y_train,
-                       with_logical(data.X_test, data.logical_test), data.y_test, seeds,
-                       config.train)
-    return [{"ann": a, "sann": b} for a, b in zip(ann, sann, strict=True)]
+    fused = (with_logical(data.X_train, data.logical_train),
+             with_logical(data.X_test, data.logical_test))
+    return train_baseline_and_sann(lambda n: ShallowNet(n, hidden=config.hidden), data, fused,
+                                   seeds, config.train, "ann")
 
 
 def tsne_layers(data, runs: dict[str, TrainResult], points: int, seed: int) -> dict:

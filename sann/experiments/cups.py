@@ -20,7 +20,13 @@ import numpy as np
 
 from sann.nets import DeepNet
 from sann.tasks.cups import CupsDataParams, CupsDataset, detection_summary, make_dataset
-from sann.train import TrainConfig, TrainResult, intervals_overlap, summarise, train_seeds
+from sann.train import (
+    TrainConfig,
+    TrainResult,
+    intervals_overlap,
+    summarise,
+    train_baseline_and_sann,
+)
 from sann.viz import plots
 
 NETS = ("dnn", "sann")
@@ -68,13 +74,10 @@ def train_pairs(data: CupsDataset, config: CupsExperiment,
                 seeds: list[int]) -> list[dict[str, TrainResult]]:
     """Train the DNN and SANN with every seed (each net kind's seeds are trained together,
     see `train_seeds`); one {"dnn", "sann"} pair per seed."""
-    make = lambda n: DeepNet(n, hidden=config.hidden)  # noqa: E731
-    dnn = train_seeds(make, data.X_train, data.y_train, data.X_test, data.y_test, seeds,
-                      config.train)
-    sann = train_seeds(make, with_logical(data.X_train, data.logical_train), data.y_train,
-                       with_logical(data.X_test, data.logical_test), data.y_test, seeds,
-                       config.train)
-    return [{"dnn": a, "sann": b} for a, b in zip(dnn, sann, strict=True)]
+    fused = (with_logical(data.X_train, data.logical_train),
+             with_logical(data.X_test, data.logical_test))
+    return train_baseline_and_sann(lambda n: DeepNet(n, hidden=config.hidden), data, fused,
+                                   seeds, config.train, "dnn")
 
 
 def logical_only_accuracy(data: CupsDataset) -> float:

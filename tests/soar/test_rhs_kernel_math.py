@@ -279,12 +279,7 @@ sp {done (state <s> ^dice) --> (halt)}
 def test_the_functions_agree_with_the_kernel(kernel, tmp_path: Path) -> None:
     path = tmp_path / "math.soar"
     path.write_text(AGENT)
-    theirs, ours = kernel.run_kernel(path, decisions=5), kernel.run_ours(path, decisions=5)
-    assert theirs.halted and ours.halted
-    assert "Error" not in theirs.trace
-    assert ours.output == theirs.output
-    assert ours.wm == theirs.wm
-    assert (ours.production_firings, ours.wm_size) == (theirs.production_firings, theirs.wm_size)
+    kernel.assert_agree(path, decisions=5)
 
 
 @pytest.mark.parametrize(("init", "total", "product"), SUMS[:6] + SUMS[-2:])

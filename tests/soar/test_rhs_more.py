@@ -440,12 +440,7 @@ def kernel():
 def test_new_functions_agree_with_the_kernel(kernel, tmp_path: Path) -> None:
     path = tmp_path / "values.soar"
     path.write_text(VALUES_AGENT)
-    theirs, ours = kernel.run_kernel(path, decisions=5), kernel.run_ours(path, decisions=5)
-    assert theirs.halted and ours.halted
-    assert "Error" not in theirs.trace
-    assert ours.output == theirs.output
-    assert ours.wm == theirs.wm
-    assert (ours.production_firings, ours.wm_size) == (theirs.production_firings, theirs.wm_size)
+    kernel.assert_agree(path, decisions=5)
 
 
 def test_random_numbers_agree_with_the_kernel_after_srand_7(kernel) -> None:

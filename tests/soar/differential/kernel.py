@@ -494,3 +494,14 @@ def _our_symbol(sym: Any) -> Value:
     if isinstance(sym, str):
         return ("str", sym)
     return ("id", sym.name)
+
+
+def assert_agree(path: str | Path, decisions: int) -> None:
+    """Run a rule file in both engines: both halt, the kernel reports no error, and the
+    written output, working memory, firings and WM size are equal."""
+    theirs, ours = run_kernel(path, decisions=decisions), run_ours(path, decisions=decisions)
+    assert theirs.halted and ours.halted
+    assert "Error" not in theirs.trace
+    assert ours.output == theirs.output
+    assert ours.wm == theirs.wm
+    assert (ours.production_firings, ours.wm_size) == (theirs.production_firings, theirs.wm_size)
