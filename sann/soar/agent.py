@@ -290,8 +290,31 @@ class Agent:
         for info in self._productions.values():
             info.firings = 0
         self._release_slots()
-        self._build()
-        self._column = START_COLUMN
+        column, level = self._column, self.trace_level
+        self.trace_level = 0  # the new top state is traced below, laid out as the kernel does
+        try:
+            self._build()
+        finally:
+            self.trace_level = level
+        self._column = column
+        self._trace_new_top()
+
+    def _trace_new_top(self) -> None:
+        """What the kernel's init-soar traces (measured in soar_sml): at watch 1-3 the new
+        top state's decision line, which leaves the output column after it; at watch 4-5
+        its WMEs newest first, the line, then the io WMEs newest first; at watch 0 nothing
+        (the column stays where it was)."""
+        if self.trace_level <= 0:
+            return
+        line = f"\n     0: ==>S: {self._top.id} "
+        if self.trace_level < 4:
+            self._emit(line)
+            return
+        io = self._io_id
+        wmes = sorted(self._wm.values(), key=lambda w: w.timetag, reverse=True)
+        state = "".join(f"=>WM: {trace_wme(w)}\n" for w in wmes if io not in (w.id, w.value))
+        links = "".join(f"=>WM: {trace_wme(w)}\n" for w in wmes if io in (w.id, w.value))
+        self._emit(state + line + links)
 
     def _release_slots(self) -> None:
         """Break the cycles of the preferences about to be dropped (a live preference, its

@@ -289,7 +289,9 @@ def _excise(agent: Agent, args: tuple[str, ...], base: Path) -> None:
 
 
 def _init_soar(agent: Agent, args: tuple[str, ...], base: Path) -> None:
+    """``init-soar``; the kernel answers with its message, outside the output column."""
     agent.init()
+    agent._emit_uncounted("\nAgent reinitialized.\n")
 
 
 def _aliases(agent: Agent) -> dict[str, tuple[str, ...]]:

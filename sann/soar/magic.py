@@ -69,11 +69,12 @@ def soar_cell(line: str, cell: str, namespace: dict[str, Any]) -> Agent:
     previous = agent.out
     agent.out = sys.stdout
     try:
+        if options.run:  # before init-soar, which traces the new top state
+            agent.trace(options.trace)
         if options.init:
             agent.init()
         agent.load(cell, file=f"<%%soar {options.agent}>")
         if options.run:
-            agent.trace(options.trace)
             limit = options.decisions if options.decisions is not None else DEFAULT_LIMIT
             before = agent.stats["decisions"]
             agent.run(limit)

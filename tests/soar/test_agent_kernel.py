@@ -334,6 +334,38 @@ def test_first_print_of_a_new_or_reinitialised_agent_wraps_like_the_kernel(befor
     finally:
         kernel.Shutdown()
     agent = Agent(out=io.StringIO())
+    agent.trace(1)  # the kernel's default watch level: init-soar traces the new S1
     for line in before:
         agent.load(line)
     assert agent.print("s1") == theirs
+
+
+@pytest.mark.parametrize("level", range(6))
+def test_init_soar_traces_and_answers_like_the_kernel(level) -> None:
+    """init-soar's trace of the new top state at every watch level, its answer, and the
+    column the next print wraps by (watch 0 leaves the column where the run left it)."""
+    rule = "sp {a (state <s> ^superstate nil) --> (<s> ^x 1) (write |wide enough to wrap|)}"
+    kernel = sml.Kernel.CreateKernelInCurrentThread(True, 0)
+    log: list[str] = []
+    try:
+        theirs_agent = kernel.CreateAgent("again")
+        theirs_agent.RegisterForPrintEvent(sml.smlEVENT_PRINT, lambda *a: log.append(a[-1]), None)
+        for line in (rule, f"watch {level}", "run 1"):
+            kernel.ExecuteCommandLine(line, "again")
+        log.clear()
+        answer = kernel.ExecuteCommandLine("init-soar", "again")
+        theirs = "".join(log) + answer
+        theirs_print = kernel.ExecuteCommandLine("print s1", "again")
+        kernel.DestroyAgent(theirs_agent)
+    finally:
+        kernel.Shutdown()
+    out = io.StringIO()
+    agent = Agent(out=out)
+    agent.trace(1)
+    for line in (rule, f"watch {level}", "run 1"):
+        agent.load(line)
+    out.seek(0)
+    out.truncate()
+    agent.load("init-soar")
+    assert out.getvalue() == theirs
+    assert agent.print("s1") == theirs_print
