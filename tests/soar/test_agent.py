@@ -542,3 +542,20 @@ def test_wait_snc_in_a_substate() -> None:
     assert out.getvalue() == "\n     1:    O: O1 (a)" + "".join(
         f"\n     {n}:    ==>S: S2 (operator no-change)" for n in (2, 3, 4))
     assert agent.stats["elaboration_cycles"] == 2 and values(agent, "S2", "mark") == ["yes"]
+
+
+def test_an_agent_raises_the_young_gc_threshold_and_never_lowers_it() -> None:
+    import gc
+
+    from sann.soar.agent import GC_YOUNG_THRESHOLD
+
+    before = gc.get_threshold()
+    try:
+        gc.set_threshold(700, 10, 10)
+        Agent()
+        assert gc.get_threshold() == (GC_YOUNG_THRESHOLD, 10, 10)
+        gc.set_threshold(GC_YOUNG_THRESHOLD * 2, 5, 5)
+        Agent()
+        assert gc.get_threshold() == (GC_YOUNG_THRESHOLD * 2, 5, 5)
+    finally:
+        gc.set_threshold(*before)
