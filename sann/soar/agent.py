@@ -351,7 +351,7 @@ class Agent:
             raise SoarRuntimeError(f"run: decision count must be >= 0, got {decisions}")
         self._stop = False
         self._halt_note = ""
-        target = None if decisions is None else self._decisions + decisions
+        target = None if decisions is None else self._decisions + self._owed(decisions)
         if decisions == 0:
             return self.stats
         while not self._halted and not self._stop:
@@ -360,6 +360,14 @@ class Agent:
                 break
         self._stopped_message(target)
         return self.stats
+
+    def _owed(self, decisions: int) -> int:
+        """The decision phases ``run N`` makes.  A run stopped by an interrupt at the end of
+        an apply phase resumes mid-cycle; the kernel counts the rest of that cycle as one
+        of the N (measured in soar_sml: after it, run 1 and run 2 both stop before the next
+        apply phase, run 3 one decision later; after an interrupt in a propose phase, the
+        cycle's decision is still to come and run N makes N)."""
+        return decisions - 1 if decisions > 1 and self._phase == "output" else decisions
 
     def _stopped_message(self, target: int | None) -> None:
         """What the kernel prints, at every watch level, when a run stops at the end of the

@@ -304,3 +304,34 @@ def test_a_print_after_a_stop_wraps_where_the_kernels_does(kernel, case: str, ru
     if case == "halt-crlf" and runs == ["run"]:
         pytest.skip("same as halt")
     same(kernel, [WIDE, *STOPPING[case]], [*runs, "print --depth 1 S1"])
+
+
+# ------------------------------------------------- 6. run N after an interrupt
+
+# A counter agent whose go operator is interrupted in its apply phase (count 3), or in the
+# apply phase of a substate (count 2); it halts at 12.
+COUNTER = [
+    "sp {init (state <s> ^superstate nil -^count) --> (<s> ^operator <o> + >) (<o> ^name init)}",
+    "sp {inita (state <s> ^operator.name init) --> (<s> ^count 0)}",
+    "sp {prop (state <s> ^superstate nil ^count <c>) --> (<s> ^operator <o> +) (<o> ^name go)}",
+    "sp {app (state <s> ^operator.name go ^count <c>) --> (<s> ^count <c> - (+ <c> 1))}",
+    "sp {stop (state <s> ^superstate nil ^count 12) --> (halt)}",
+]
+INTERRUPTS = {
+    "apply": "sp {int (state <s> ^operator.name go ^count 3) --> (interrupt)}",
+    "substate": "sp {int (state <s> ^superstate.count 2) --> (interrupt)}",
+}
+
+
+@pytest.mark.parametrize("runs", [["run", "run 1", "run 1"], ["run", "run 2", "run 1"],
+                                  ["run", "run 3", "run 2"], ["run 6", "run 4", "run"]],
+                         ids=" ".join)
+@pytest.mark.parametrize("where", list(INTERRUPTS))
+def test_run_n_after_an_interrupt_in_an_apply_phase_counts_as_the_kernel(
+    kernel, where: str, runs: list[str]
+) -> None:
+    """The rest of the interrupted cycle is one of the next run's N decisions (the watch-1
+    text of every run compared: its decision lines and stop messages)."""
+    printed = same(kernel, [*COUNTER, INTERRUPTS[where]], ["watch 1", *runs])
+    if where == "apply" and runs[1] == "run 2":
+        assert printed[2] == "\n     5:    O: O5 (go)"  # one decision, as after run 1
