@@ -340,6 +340,8 @@ class Agent:
             self._run_phase()
             if target is not None and self._decisions >= target and self._phase == "apply":
                 break
+        if self.trace_level >= 4:
+            self._trace_wm_changes()
         self._stopped_message(target)
         return self.stats
 
@@ -460,6 +462,9 @@ class Agent:
         self._refs: dict[Identifier, int] = {}
         self._in_wm_phase = False
         self._phase_timetag = 0
+        # WMEs added and removed since the last trace of working-memory changes (watch 4+)
+        self._traced_adds: list[WME] = []
+        self._traced_removes: list[WME] = []
         self._context_changed: Goal | None = None
         self._neg_watch: dict[tuple, list[tuple]] = {}
         # (justification, conjunctive negation, bindings) whose watched WME came this phase
@@ -555,7 +560,7 @@ class Agent:
             self._check_negations(wme)
         self.matcher.add_wme(wme)
         if self.trace_level >= 4:
-            self._emit("\n=>WM: " + trace_wme(wme))
+            self._traced_adds.append(wme)
         return wme
 
     def _remove_wme(self, wme: WME) -> None:
@@ -576,9 +581,22 @@ class Agent:
                 del self._refs[value]
                 self._unlinked.append(value)
         if self.trace_level >= 4:
-            self._emit("\n<=WM: " + trace_wme(wme))
+            self._traced_removes.append(wme)
         if self._dependents or self._gds_index:  # justifications and substates only
             self._substate_wme_gone(wme)
+
+    def _trace_wm_changes(self) -> None:
+        """Print the WME changes buffered since the last call, as the kernel's
+        ``do_buffered_wm_changes`` does at the end of each working-memory phase (measured:
+        additions newest first, then removals, the last requested first; each line ends
+        with a newline)."""
+        adds, removes = self._traced_adds, self._traced_removes
+        if not adds and not removes:
+            return
+        self._traced_adds, self._traced_removes = [], []
+        lines = [f"=>WM: {trace_wme(wme)}\n" for wme in reversed(adds)]
+        lines += [f"<=WM: {trace_wme(wme)}\n" for wme in reversed(removes)]
+        self._emit("".join(lines))
 
     def _substate_wme_gone(self, wme: WME) -> None:
         """A WME left: retract the justifications that rest on it and remove the substates
@@ -642,6 +660,8 @@ class Agent:
         if self.trace_level >= 2:
             self._emit("\n--- Input Phase --- \n")
         self._apply_input_ops()
+        if self.trace_level >= 4:
+            self._trace_wm_changes()
         self._collect_changes()
         if self.trace_level >= 2:
             self._emit("\n--- END Input Phase --- \n")
@@ -823,6 +843,8 @@ class Agent:
         self._decide_context_slots()
         self._decisions += 1
         self._collect_changes()
+        if self.trace_level >= 4:
+            self._trace_wm_changes()
         if self.trace_level >= 2:
             self._emit("\n--- END Decision Phase ---\n")
         self._phase = "apply"
@@ -1047,16 +1069,11 @@ class Agent:
     def _retract(self, inst: Instantiation) -> None:
         """Remove an instantiation's i-supported preferences (o-supported ones stay)."""
         trace = self.trace_level
+        if trace >= 3:
+            self._trace_retraction(inst)
         remove = self._remove_preference
-        removed = False
         for pref in inst.prefs:
             if pref.live and not pref.o_supported:
-                if trace >= 3:
-                    if not removed:
-                        self._emit(f"\nRetracting {inst.name}\n")
-                    if trace >= 5:
-                        self._emit("\n -" + trace_preference(pref))
-                removed = True
                 remove(pref)
         if inst.goal.level > 1 and not any(p.live for p in inst.prefs):
             inst.goal.insts.pop(inst, None)
@@ -1073,6 +1090,15 @@ class Agent:
                 bucket = self._dependents.get(wme)
                 if bucket is not None and inst in bucket:
                     bucket.remove(inst)
+
+    def _trace_retraction(self, inst: Instantiation) -> None:
+        """``Retracting name`` when the instantiation loses a preference; at watch 5 the
+        preferences it loses, in the order they were asserted (measured)."""
+        gone = [pref for pref in reversed(inst.prefs) if pref.live and not pref.o_supported]
+        if gone:
+            self._emit(f"\nRetracting {inst.name}\n")
+            if self.trace_level >= 5:
+                self._emit("".join(trace_preference("-", pref) for pref in gone))
 
     def _assert_preferences(self, fired: list[Instantiation], o_support: bool) -> None:
         """Let o-supported rejects remove the older preferences for their values, then add
@@ -1091,7 +1117,7 @@ class Agent:
                      ] if o_support or justifications else ()
         for pref in o_rejects:
             if tracing:
-                self._emit("\n+" + trace_preference(pref))
+                self._emit(trace_preference("+", pref))
             self._o_reject(pref)
             pref.inst = None  # type: ignore[assignment]  # never in a slot: done with
         add = self._add_preference
@@ -1100,7 +1126,7 @@ class Agent:
                 if pref.inst is None:  # an o-reject, done with above
                     continue
                 if tracing:
-                    self._emit("\n+" + trace_preference(pref))
+                    self._emit(trace_preference("+", pref))
                 add(pref)
 
     def _slot(self, ident: Identifier, attr: Symbol, create: bool = True) -> Slot | None:
@@ -1203,7 +1229,7 @@ class Agent:
             ]
         for pref in doomed:
             if self.trace_level >= 5:
-                self._emit("\n-" + trace_preference(pref))
+                self._emit(trace_preference("-", pref))
             self._remove_preference(pref)
 
     # ------------------------------------------------------------- WM phase
@@ -1217,6 +1243,8 @@ class Agent:
             self._working_memory_changes()
         finally:
             self._in_wm_phase = False
+        if self.trace_level >= 4:
+            self._trace_wm_changes()
         while self._dead_ids:
             self._slots.pop(self._dead_ids.pop(), None)
         if self._ncc_checks:
@@ -1260,14 +1288,21 @@ class Agent:
             if adds:
                 self._add_slot_wmes(adds)
             context, self._changed_context = self._changed_context, []
+            traced = len(self._traced_removes)
             for slot in reversed(context):
                 slot.changed = False
                 self._update_acceptable_wmes(slot)
             remove_wme = self._remove_wme
             if removes:
                 self.matcher.mark_removals()
+            # The kernel requests the removals the slot diffs decided before those of the
+            # operator slots' acceptable-preference WMEs, made above (measured: it traces
+            # (15: S1 ^operator O1 +), (16: S1 ^operator O1), then (14: O1 ^name init)).
+            context_removals = self._traced_removes[traced:]
+            del self._traced_removes[traced:]
             for wme in removes:
                 remove_wme(wme)
+            self._traced_removes += context_removals
             if self._pending_gds:
                 self._extend_gds()
             if self._unlinked:
@@ -1455,7 +1490,7 @@ class Agent:
         if self.trace_level >= 2:
             self._emit(
                 "\n        REMOVING: Operator from context slot (proposal no longer matches): "
-                + trace_wme(wme)
+                + trace_wme(wme) + "\n"
             )
         goal = self._goals[slot.id]
         if goal.sub is not None:
@@ -1549,6 +1584,8 @@ class Agent:
             self._remember_source(wme, slot, (REQUIRE, ACCEPTABLE))
         name = self._operator_name(value)
         self._operator_names.append(name if name is not None else "?")
+        if self.trace_level >= 4:
+            self._trace_wm_changes()  # the kernel traces the decision after its WM changes
         if self.trace_level >= 1:
             indent = " " + "   " * goal.level
             label = f" ({symbol_text(name)})" if name is not None else ""
@@ -1591,6 +1628,8 @@ class Agent:
         sub.arch_wmes.append(self._add_arch(ident, "choices", choices))
         sub.arch_wmes.append(self._add_arch(ident, "quiescence", "t"))
         self._update_items(sub, candidates, slot)
+        if self.trace_level >= 4:
+            self._trace_wm_changes()  # the kernel traces the decision after its WM changes
         if self.trace_level >= 1:
             indent = " " + "   " * goal.level
             kind = (
@@ -1637,7 +1676,7 @@ class Agent:
             for pref in inst.prefs:
                 if pref.live:
                     if self.trace_level >= 5:
-                        self._emit("\n-" + trace_preference(pref))
+                        self._emit(trace_preference("-", pref))
                     self._remove_preference(pref)
         goal.insts.clear()
         for wme in list(goal.items.values()) + list(goal.counts.values()) + goal.arch_wmes:
