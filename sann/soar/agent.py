@@ -1072,7 +1072,10 @@ class Agent:
         if trace >= 3:
             self._trace_retraction(inst)
         remove = self._remove_preference
-        for pref in inst.prefs:
+        # In the order the kernel made them (inst.prefs is newest first): the slots they
+        # leave are decided in that order's reverse, which the trace shows (measured:
+        # <=WM: (37: O4 ^name buy), then (38: O4 ^item I5) for a rule that made both).
+        for pref in reversed(inst.prefs):
             if pref.live and not pref.o_supported:
                 remove(pref)
         if inst.goal.level > 1 and not any(p.live for p in inst.prefs):
@@ -1473,7 +1476,9 @@ class Agent:
                 if key not in wanted:
                     wanted[key] = value
         current = slot.acceptable_wmes
-        gone = [key for key in current if key not in wanted]
+        # Newest first, as the kernel's list of them (measured: the trace shows the oldest
+        # removed first, the selected operator's WME just after its acceptable one).
+        gone = [key for key in reversed(current) if key not in wanted]
         for key in gone:
             wme = current.pop(key)
             self._operator_proposal_gone(slot, wme)
