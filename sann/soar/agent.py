@@ -462,6 +462,8 @@ class Agent:
         self._refs: dict[Identifier, int] = {}
         self._in_wm_phase = False
         self._phase_timetag = 0
+        # the newest timetag when the matcher's changes were last taken (_collect_changes)
+        self._batch_start = 0
         # WMEs added and removed since the last trace of working-memory changes (watch 4+)
         self._traced_adds: list[WME] = []
         self._traced_removes: list[WME] = []
@@ -862,12 +864,42 @@ class Agent:
         node is activated first); firing then takes them newest first, like the kernel's
         match-set lists."""
         new, gone = self.matcher.take_changes()
+        start, self._batch_start = self._batch_start, self._timetag
         if gone:
             self._retract_matches(gone, self.matcher.blocked_retractions)
         if new:
             if len(new) > 1 and not in_match_order:
-                new = self._kernel_sorted(new, new)
+                new = self._batch_sorted(new, start)
             self._queue_matches(new)
+
+    def _batch_sorted(self, new: list, start: int) -> list:
+        """New matches in the order the kernel's Rete made them from one batch of WME
+        changes (the WMEs newer than ``start``). The kernel adds a batch to its Rete newest
+        first (measured: three ``(S1 ^x v)`` made by one firing each match one rule, whose
+        firings come oldest WME first), so a match is made when its oldest WME of the batch
+        enters, and the matches of older WMEs are made later; matches made by no new WME
+        (a removal unblocked them) come first, as before. See ``_kernel_key``."""
+        creators = [self._creator(match, start) for match in new]
+        firsts = [(0, tt) if tt <= start else (1, -tt) for tt, _ in creators]
+        if len(set(firsts)) < len(firsts):
+            keys = [first + self._kernel_key(match, creator)[1:]
+                    for first, match, creator in zip(firsts, new, creators, strict=True)]
+        else:
+            keys = firsts
+        order = sorted(range(len(new)), key=keys.__getitem__)
+        return [new[k] for k in order]
+
+    @staticmethod
+    def _creator(match: object, start: int) -> tuple[int, int]:
+        """The timetag and first index of the match's oldest WME newer than ``start`` (its
+        newest WME when none is)."""
+        newest, index = match.newest  # type: ignore[attr-defined]
+        if newest <= start:
+            return newest, index
+        for i, wme in enumerate(match.wmes):  # type: ignore[attr-defined]
+            if wme is not None and start < wme.timetag < newest:
+                newest, index = wme.timetag, i
+        return newest, index
 
     def _retract_matches(self, gone: list, blocked: int = -1) -> None:
         """Schedule the retraction of fired matches that stopped matching, in creation
@@ -981,13 +1013,15 @@ class Agent:
         order = sorted(range(len(items)), key=keys.__getitem__, reverse=newest_first)
         return [items[k] for k in order]
 
-    def _kernel_key(self, match: object) -> tuple[int, ...]:
+    def _kernel_key(self, match: object, creator: tuple[int, int] | None = None
+                    ) -> tuple[int, ...]:
         """The order the kernel's Rete makes new matches in: by the newest matched WME, then
         by the alpha memory it entered (``(* ^attr *)`` before ``(* ^attr value)``) and the
         path from the join it activated down to the production (``KernelOrder``).  A WME
         matched by several conditions makes the match in the last alpha memory it enters,
-        at the first of them in the kernel's order."""
-        newest, index = match.newest  # type: ignore[attr-defined]
+        at the first of them in the kernel's order. ``creator``: the WME that made the
+        match and its index, when not the newest (see ``_batch_sorted``)."""
+        newest, index = creator or match.newest  # type: ignore[attr-defined]
         places = self._kernel_places.get(match.production.name)  # type: ignore[attr-defined]
         if places is None:
             return (newest,)
