@@ -702,12 +702,26 @@ class Agent:
                 self._end_phase(apply, end)
                 return
             if self._halted:  # an interrupt (_stop) lets the phase finish, as in the kernel
-                if self.trace_level >= 2:
+                # The phase's END line only when the halt came in its last cycle (measured:
+                # 'Change Working Memory (PE) ---\n\nSystem halted.' when IE firings follow).
+                if self.trace_level >= 2 and self._quiescent(apply):
                     self._emit(
                         "\n--- END Application Phase ---\n" if apply
                         else "\n--- END Propose Phase ---\n"
                     )
                 return
+
+    def _quiescent(self, apply: bool) -> bool:
+        """Whether no goal has firings or retractions waiting (without the consistency
+        checks of ``_next_active``)."""
+        if self._nil_retractions:
+            return False
+        goal: Goal | None = self._top
+        while goal is not None:
+            if goal.pending_i or goal.retractions or (apply and goal.pending_o):
+                return False
+            goal = goal.sub
+        return True
 
     def _end_phase(self, apply: bool, end: str) -> None:
         if self.trace_level >= 2:
