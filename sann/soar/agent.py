@@ -787,6 +787,8 @@ class Agent:
         level_goal = goal
         change_level = goal.level if goal is not None else 0
         while level_goal is not None:
+            if level_goal is not goal and not self._pending_from(level_goal, firing):
+                break  # the kernel goes down the stack only while assertions wait below
             if self.trace_level >= 3:
                 self._emit(
                     f"\n--- Inner Elaboration Phase, active level {level_goal.level}"
@@ -809,6 +811,17 @@ class Agent:
             self._emit(f"\t--- Change Working Memory ({firing}) ---\n")
         self._working_memory_phase()
         self._collect_changes()
+
+    def _pending_from(self, goal: Goal, firing: str) -> bool:
+        """Whether ``goal`` or a goal below it has assertions of the ``firing`` type waiting
+        (measured: the kernel prints a lower level's 'Inner Elaboration Phase' header only
+        then)."""
+        level_goal: Goal | None = goal
+        while level_goal is not None:
+            if level_goal.pending_i if firing == "IE" else level_goal.pending_o:
+                return True
+            level_goal = level_goal.sub
+        return False
 
     def _fire_level(self, goal: Goal, firing: str, change_level: int) -> bool:
         """Fire one level's pending assertions; return whether any were pending.
@@ -1149,7 +1162,7 @@ class Agent:
         if gone:
             self._emit(f"\nRetracting {inst.name}\n")
             if self.trace_level >= 5:
-                self._emit("".join(trace_preference("-", pref) for pref in gone))
+                self._emit_line("".join(trace_preference("-", pref) for pref in gone))
 
     def _assert_preferences(self, fired: list[Instantiation], o_support: bool) -> None:
         """Let o-supported rejects remove the older preferences for their values, then add
@@ -1166,9 +1179,7 @@ class Agent:
         o_rejects = [pref for inst in insts for pref in reversed(inst.prefs)
                      if pref.o_supported and pref.type == REJECT
                      ] if o_support or justifications else ()
-        for pref in o_rejects:
-            if tracing:
-                self._emit(trace_preference("+", pref))
+        for pref in o_rejects:  # not traced itself (measured): what it removes is
             self._o_reject(pref)
             pref.inst = None  # type: ignore[assignment]  # never in a slot: done with
         add = self._add_preference
@@ -1177,7 +1188,7 @@ class Agent:
                 if pref.inst is None:  # an o-reject, done with above
                     continue
                 if tracing:
-                    self._emit(trace_preference("+", pref))
+                    self._emit_line(trace_preference("+", pref))
                 add(pref)
 
     def _slot(self, ident: Identifier, attr: Symbol, create: bool = True) -> Slot | None:
@@ -1280,7 +1291,7 @@ class Agent:
             ]
         for pref in doomed:
             if self.trace_level >= 5:
-                self._emit(trace_preference("-", pref))
+                self._emit_line(trace_preference("-", pref))
             self._remove_preference(pref)
 
     # ------------------------------------------------------------- WM phase
@@ -1729,7 +1740,7 @@ class Agent:
             for pref in inst.prefs:
                 if pref.live:
                     if self.trace_level >= 5:
-                        self._emit(trace_preference("-", pref))
+                        self._emit_line(trace_preference("-", pref))
                     self._remove_preference(pref)
         goal.insts.clear()
         for wme in list(goal.items.values()) + list(goal.counts.values()) + goal.arch_wmes:
