@@ -813,12 +813,14 @@ class Agent:
         self._collect_changes()
 
     def _pending_from(self, goal: Goal, firing: str) -> bool:
-        """Whether ``goal`` or a goal below it has assertions of the ``firing`` type waiting
-        (measured: the kernel prints a lower level's 'Inner Elaboration Phase' header only
-        then)."""
+        """Whether ``goal`` or a goal below it has retractions or assertions of the
+        ``firing`` type waiting (measured: the kernel prints a lower level's 'Inner
+        Elaboration Phase' header only then)."""
         level_goal: Goal | None = goal
         while level_goal is not None:
-            if level_goal.pending_i if firing == "IE" else level_goal.pending_o:
+            if level_goal.retractions or (
+                level_goal.pending_i if firing == "IE" else level_goal.pending_o
+            ):
                 return True
             level_goal = level_goal.sub
         return False
