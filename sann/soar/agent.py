@@ -60,6 +60,8 @@ _new = object.__new__
 #: Where a new kernel agent's printer believes its output line to be, and again after
 #: init-soar (measured: its first print wraps as if 17 characters were on the line).
 START_COLUMN = 17
+#: A state's links to its memories: the kernel removes them (and their children) last
+_LINK_ATTRS = ("reward-link", "epmem", "smem")
 
 
 def _default_matcher() -> type:
@@ -467,6 +469,8 @@ class Agent:
         # WMEs added and removed since the last trace of working-memory changes (watch 4+)
         self._traced_adds: list[WME] = []
         self._traced_removes: list[WME] = []
+        # removed goals' link WMEs and their children: traced after the batch's others
+        self._traced_late: list[WME] = []
         self._context_changed: Goal | None = None
         self._neg_watch: dict[tuple, list[tuple]] = {}
         # (justification, conjunctive negation, bindings) whose watched WME came this phase
@@ -593,9 +597,10 @@ class Agent:
         additions newest first, then removals, the last requested first; each line ends
         with a newline)."""
         adds, removes = self._traced_adds, self._traced_removes
-        if not adds and not removes:
+        if not adds and not removes and not self._traced_late:
             return
-        self._traced_adds, self._traced_removes = [], []
+        removes += self._traced_late
+        self._traced_adds, self._traced_removes, self._traced_late = [], [], []
         lines = [f"=>WM: {trace_wme(wme)}\n" for wme in reversed(adds)]
         lines += [f"<=WM: {trace_wme(wme)}\n" for wme in reversed(removes)]
         self._emit("".join(lines))
@@ -810,6 +815,8 @@ class Agent:
             # goes on on the same line (measured: "applied\t--- Change Working Memory").
             self._emit(f"\t--- Change Working Memory ({firing}) ---\n")
         self._working_memory_phase()
+        if self.trace_level >= 4:
+            self._trace_wm_changes()
         self._collect_changes()
 
     def _pending_from(self, goal: Goal, firing: str) -> bool:
@@ -1298,17 +1305,15 @@ class Agent:
 
     # ------------------------------------------------------------- WM phase
 
-    def _working_memory_phase(self) -> None:
+    def _working_memory_phase(self, diffs_last: bool = False) -> None:
         """Turn changed slots into WME changes, in the kernel's timetag order."""
         if self._in_wm_phase:
             return
         self._in_wm_phase = True
         try:
-            self._working_memory_changes()
+            self._working_memory_changes(diffs_last)
         finally:
             self._in_wm_phase = False
-        if self.trace_level >= 4:
-            self._trace_wm_changes()
         while self._dead_ids:
             self._slots.pop(self._dead_ids.pop(), None)
         if self._ncc_checks:
@@ -1329,8 +1334,14 @@ class Agent:
             if negation_matches(element, wmes, bindings):
                 self._schedule_retraction(just)
 
-    def _working_memory_changes(self) -> None:
+    def _working_memory_changes(self, diffs_last: bool = False) -> None:
+        """Decide the changed slots until none is left. The trace shows the removals in
+        the kernel's order (measured in soar_sml; see ``_order_traced_removals``)."""
         self._phase_timetag = self._timetag
+        buffer = self._traced_removes
+        phase_start = len(buffer)
+        context_removals: list[WME] = []
+        collected: list[WME] = []
         while self._changed or self._changed_context:
             changed, self._changed = self._changed, []
             adds: list[tuple[Slot, object, Symbol]] = []
@@ -1352,31 +1363,46 @@ class Agent:
             if adds:
                 self._add_slot_wmes(adds)
             context, self._changed_context = self._changed_context, []
-            traced = len(self._traced_removes)
+            traced = len(buffer)
             for slot in reversed(context):
                 slot.changed = False
                 self._update_acceptable_wmes(slot)
+            context_removals += buffer[traced:]
+            del buffer[traced:]
             remove_wme = self._remove_wme
             if removes:
                 self.matcher.mark_removals()
-            # The kernel requests the removals the slot diffs decided before those of the
-            # operator slots' acceptable-preference WMEs, made above (measured: it traces
-            # (15: S1 ^operator O1 +), (16: S1 ^operator O1), then (14: O1 ^name init)).
-            context_removals = self._traced_removes[traced:]
-            del self._traced_removes[traced:]
             for wme in removes:
                 remove_wme(wme)
-            self._traced_removes += context_removals
             if self._pending_gds:
                 self._extend_gds()
             if self._unlinked:
+                traced = len(buffer)
                 self._collect_unlinked()
+                collected += buffer[traced:]
+                del buffer[traced:]
             for slot in changed:
                 if not slot.prefs and not slot.wmes:
                     self._drop_slot(slot)
             for slot in context:
                 if not slot.prefs and not slot.wmes and not slot.acceptable_wmes:
                     self._collect_garbage(slot)
+        self._order_traced_removals(phase_start, context_removals, collected, diffs_last)
+
+    def _order_traced_removals(self, start: int, context: list[WME], collected: list[WME],
+                               diffs_last: bool) -> None:
+        """Lay the phase's traced removals (from ``start``) out in the kernel's order of
+        requests: the slot diffs' (its ``decide_non_context_slots``), those of the operator
+        slots' acceptable-preference WMEs (measured: '(15: S1 ^operator O1 +)', '(16: S1
+        ^operator O1)', then '(14: O1 ^name init)' in the trace, which reverses them), then
+        those of identifiers no longer linked. After a goal removed outside a
+        working-memory phase (``diffs_last``), the kernel collects the goal's structures
+        as unlinked: the diffs come after the acceptable-preference WMEs (measured)."""
+        buffer = self._traced_removes
+        if diffs_last:
+            buffer[start:] = context + buffer[start:] + collected
+        else:
+            buffer += context + collected
 
     def _add_slot_wmes(self, adds: list[tuple[Slot, object, Symbol]]) -> None:
         """Make the WMEs the slot diffs decided on: ``(slot, value key, value)``; the diff
@@ -1402,10 +1428,11 @@ class Agent:
             goals = self._gds_index.pop(wme, None)
             for goal in goals or ():
                 if goal.alive:
-                    if self.trace_level >= 2:
-                        self._emit(
-                            f"\nRemoving state {goal.id} because element in GDS changed."
-                            f" WME: {trace_wme(wme)}"
+                    if self.trace_level >= 2:  # measured
+                        self._emit_line(
+                            f"Removing state {goal.id} because element in GDS changed."
+                            f" WME: {trace_wme(wme)}\n\n    REMOVING GOAL [{goal.id}] due to"
+                            f" change in GDS WME {trace_wme(wme)}\n"
                         )
                     self._remove_goal(goal)
                     removed = True
@@ -1745,8 +1772,11 @@ class Agent:
                         self._emit_line(trace_preference("-", pref))
                     self._remove_preference(pref)
         goal.insts.clear()
+        traced = len(self._traced_removes)
         for wme in list(goal.items.values()) + list(goal.counts.values()) + goal.arch_wmes:
             self._remove_arch(wme)
+        if self.trace_level >= 4:
+            self._trace_goal_removal(goal, traced)
         goal.items.clear()
         goal.counts.clear()
         for match in list(goal.pending_i) + list(goal.pending_o):
@@ -1767,7 +1797,33 @@ class Agent:
         del self._goals[goal.id]
         self._dead_ids.append(goal.id)
         if not self._in_wm_phase:
-            self._working_memory_phase()
+            self._working_memory_phase(diffs_last=True)
+
+    def _trace_goal_removal(self, goal: Goal, start: int) -> None:
+        """Put the removed goal's architecture WMEs (traced from ``start`` on) in the
+        kernel's order of removal (measured in soar_sml; the trace shows it reversed): its
+        ^item WMEs with their count, its ^non-numeric ones with theirs, its impasse WMEs
+        (type, superstate, attribute, impasse, choices, quiescence), each group newest
+        first; then, after the
+        batch's other removals, its ^reward-link, ^epmem and ^smem WMEs newest first, and
+        the epmem and smem links' children, each link's newest first."""
+        group = self._newest_first
+        items = group([*goal.items.values(), *goal.counts.values()])
+        items = ([w for w in items if w.attr in ("item", "item-count")]
+                 + [w for w in items if w.attr not in ("item", "item-count")])
+        own = [w for w in goal.arch_wmes if w.id is goal.id]
+        links = group(w for w in own if w.attr in _LINK_ATTRS)
+        early = items + group(w for w in own if w.attr not in _LINK_ATTRS)
+        late = links + [child for link in reversed(links) for child in
+                        group(w for w in goal.arch_wmes if w.id is link.value)]
+        placed = {id(wme) for wme in early + late}
+        kept = [wme for wme in self._traced_removes[start:] if id(wme) not in placed]
+        self._traced_removes[start:] = early + kept
+        self._traced_late += late
+
+    @staticmethod
+    def _newest_first(wmes: Iterable[WME]) -> list[WME]:
+        return sorted(wmes, key=lambda wme: -wme.timetag)
 
     def _consistent_through(self, limit: Goal | None) -> bool:
         """Check decisions from the top down to ``limit`` (the bottom if None); remove the
@@ -1825,14 +1881,20 @@ class Agent:
     def _remove_current_decision(self, goal: Goal) -> None:
         if goal.sub is None and goal.selected() is None:
             return
+        traced = len(self._traced_removes)
         if goal.sub is not None:
             self._remove_goal(goal.sub)
         selected = goal.selected()
         if selected is not None:
             goal.op_slot.wmes.clear()
             self._remove_wme(selected)
+            if self.trace_level >= 4:  # the kernel removes it before the substates
+                self._traced_removes.remove(selected)
+                self._traced_removes.insert(traced, selected)
         self._context_changed_at(goal.id)
         self._collect_changes()
+        if self.trace_level >= 4:
+            self._trace_wm_changes()
 
     # ------------------------------------------------------------- results, GDS
 
