@@ -1832,22 +1832,26 @@ class Agent:
         while goal is not None:
             if not self._decision_consistent(goal):
                 if self.trace_level >= 2 and (goal.sub is not None or goal.selected()):
-                    self._emit_line(
-                        f"Removing substates of {goal.id} because the operator last selected"
-                        f" in {goal.id} is not\nconsistent with the current preferences.\n"
-                    )
-                    if self.trace_level >= 3:
-                        self._emit(
-                            f"\n       REMOVING CONTEXT SLOT: Slot Identifier [{goal.id}] and"
-                            " attribute [operator]\n\n          Decision for goal"
-                            f" [{goal.id}] is inconsistent.  Replacing it with....\n"
-                        )
+                    self._trace_inconsistent(goal)
                 self._remove_current_decision(goal)
                 return False
             if goal is limit:
                 break
             goal = goal.sub
         return True
+
+    def _trace_inconsistent(self, goal: Goal) -> None:
+        """What the kernel prints at watch 2 and more when it removes an inconsistent
+        decision (measured in soar_sml): the 'REMOVING CONTEXT SLOT' line only when no
+        operator was selected (an impasse stood there)."""
+        text = (f"Removing substates of {goal.id} because the operator last selected"
+                f" in {goal.id} is not\nconsistent with the current preferences.\n")
+        if goal.selected() is None:
+            text += (f"\n       REMOVING CONTEXT SLOT: Slot Identifier [{goal.id}] and"
+                     " attribute [operator]\n")
+        text += (f"\n          Decision for goal [{goal.id}] is inconsistent.  Replacing it"
+                 " with....\n")
+        self._emit_line(text)
 
     def _decision_consistent(self, goal: Goal) -> bool:
         slot = goal.op_slot
