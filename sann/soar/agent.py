@@ -1064,6 +1064,11 @@ class Agent:
         place = places.get(index)
         if place is None:
             return (newest,)
+        if newest <= place[6]:
+            # Made when the production was loaded, in the order of loading (measured: of
+            # two such rules with the same conditions, a new WME that blocks both retracts
+            # the first loaded first, as it does the match made first at run time).
+            return (newest, -1, -place[3][-1])
         wmes = match.wmes  # type: ignore[attr-defined]
         if place[4]:  # the WME may be in other conditions too
             wme = wmes[index]
