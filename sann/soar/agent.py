@@ -1771,7 +1771,7 @@ class Agent:
             goal.op_slot.wmes.clear()
             self._remove_wme(selected)
         for inst in list(goal.insts):
-            for pref in inst.prefs:
+            for pref in reversed(inst.prefs):  # as made (measured: the watch-5 trace)
                 if pref.live:
                     if self.trace_level >= 5:
                         self._emit_line(trace_preference("-", pref))
