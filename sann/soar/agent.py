@@ -1190,7 +1190,10 @@ class Agent:
         justifications, self._new_justifications = self._new_justifications, []
         insts = [*justifications, *reversed(fired)] if justifications else fired[::-1]
         tracing = self.trace_level >= 5
-        o_rejects = [pref for inst in insts for pref in reversed(inst.prefs)
+        # The kernel takes the o-rejects in the reverse of the order it asserts the rest
+        # (measured: '- (S1 ^last-moved other ...)' of the last rule to assert, before the
+        # first rule's '- (D1 ^on a ...)' and '- (S1 ^moves 0 ...)').
+        o_rejects = [pref for inst in reversed(insts) for pref in inst.prefs
                      if pref.o_supported and pref.type == REJECT
                      ] if o_support or justifications else ()
         for pref in o_rejects:  # not traced itself (measured): what it removes is
