@@ -782,9 +782,12 @@ class Agent:
         pending assertions of the firing type fire level by level from the active goal down
         (each level's preferences asserted before the next level fires), then the active
         goal's retractions and those of removed goals, then the working-memory phase."""
-        if self.trace_level >= 2 and goal is not None and self._phase == "apply":
+        # A cycle of removed goals' retractions alone is an IE cycle at depth 0 (measured)
+        shown = "IE" if goal is None else firing
+        if self.trace_level >= 2 and self._phase == "apply":
+            depth = 0 if goal is None else goal.level
             self._emit_line(
-                f"\t--- Firing Productions ({firing}) For State At Depth {goal.level} ---\n"
+                f"\t--- Firing Productions ({shown}) For State At Depth {depth} ---\n"
             )
         if goal is None:
             if self.trace_level >= 3:
@@ -810,10 +813,10 @@ class Agent:
             goal.retractions = []
         for inst in retractions:
             self._retract(inst)
-        if self.trace_level >= 2 and goal is not None and self._phase == "apply":
+        if self.trace_level >= 2 and self._phase == "apply":
             # Not on a fresh line: after a write that did not end its line, the kernel
             # goes on on the same line (measured: "applied\t--- Change Working Memory").
-            self._emit(f"\t--- Change Working Memory ({firing}) ---\n")
+            self._emit(f"\t--- Change Working Memory ({shown}) ---\n")
         self._working_memory_phase()
         if self.trace_level >= 4:
             self._trace_wm_changes()
@@ -1594,13 +1597,18 @@ class Agent:
                 + trace_wme(wme) + "\n"
             )
         goal = self._goals[slot.id]
-        if goal.sub is not None:
+        traced = len(self._traced_removes)
+        sub = goal.sub
+        if sub is not None:
             if self.trace_level >= 2:
-                self._emit(f"\nRemoving state {goal.sub.id} because of an operator removal.")
-            self._remove_goal(goal.sub)
+                self._emit_line(f"Removing state {sub.id} because of an operator removal.\n")
+            self._remove_goal(sub)
         del slot.wmes[_vkey(wme.value)]
         self._context_changed_at(slot.id)
         self._remove_wme(selected)
+        if sub is not None and self.trace_level >= 4:
+            # the kernel removes the operator before the substate (measured)
+            self._traced_removes.insert(traced, self._traced_removes.pop())
 
     def _collect_garbage(self, slot: Slot) -> None:
         if slot.is_empty() and not slot.is_context:
@@ -1685,6 +1693,7 @@ class Agent:
             self._remember_source(wme, slot, (REQUIRE, ACCEPTABLE))
         name = self._operator_name(value)
         self._operator_names.append(name if name is not None else "?")
+        self._collect_changes()  # before the WME trace: it may warn (measured)
         if self.trace_level >= 4:
             self._trace_wm_changes()  # the kernel traces the decision after its WM changes
         if self.trace_level >= 1:
@@ -1729,6 +1738,7 @@ class Agent:
         sub.arch_wmes.append(self._add_arch(ident, "choices", choices))
         sub.arch_wmes.append(self._add_arch(ident, "quiescence", "t"))
         self._update_items(sub, candidates, slot)
+        self._collect_changes()  # before the WME trace: it may warn (measured)
         if self.trace_level >= 4:
             self._trace_wm_changes()  # the kernel traces the decision after its WM changes
         if self.trace_level >= 1:
