@@ -1207,9 +1207,28 @@ class Agent:
             for pref in reversed(inst.prefs):
                 if pref.inst is None:  # an o-reject, done with above
                     continue
+                if pref.o_supported and inst.goal.level == 1 and self._already_supported(pref):
+                    if tracing:
+                        self._emit_line(trace_preference("+", pref)[:-1]
+                                        + " ALREADY SUPPORTED ON TOP LEVEL.  IGNORING.\n")
+                    continue
                 if tracing:
                     self._emit_line(trace_preference("+", pref))
                 add(pref)
+
+    def _already_supported(self, pref: Preference) -> bool:
+        """Whether the slot already holds the same o-supported preference: the kernel then
+        ignores a new one made on the top level (measured in soar_sml: '+ (S1 ^note x +
+        :O ) (a) ALREADY SUPPORTED ON TOP LEVEL.  IGNORING.', and a later o-reject of x
+        removes only the older preference)."""
+        slot = self._slot(pref.id, pref.attr, create=False)
+        if slot is None:
+            return False
+        value, referent = _vkey(pref.value), _vkey(pref.referent)
+        return any(old.o_supported and _vkey(old.value) == value
+                   and type(old.value) is type(pref.value)
+                   and _vkey(old.referent) == referent
+                   for old in slot.prefs.get(pref.type, ()))
 
     def _slot(self, ident: Identifier, attr: Symbol, create: bool = True) -> Slot | None:
         slots = self._slots.get(ident)

@@ -13,7 +13,8 @@ What was measured in the kernel and is checked here:
   removed goal's own WMEs in groups, its memory links and their children last.
 - A preference line is ``+ (S1 ^x 1 +) (rule)\\n`` (``[level N]`` after it in a substate),
   ``-`` when removed, in the order it was asserted; it starts on a fresh line, a ``=>WM:``
-  line does not; an o-supported reject is not traced itself.
+  line does not; an o-supported reject is not traced itself; an o-supported preference on
+  the top level that the slot already holds is ignored, and said so.
 - A halt prints the phase's END line only when the phase ends in the cycle that halted.
 """
 
@@ -64,6 +65,14 @@ CORNERS = {
         "sp {i (state <s> ^superstate nil -^n) --> (<s> ^n 0)}",
         "sp {a (state <s> ^operator.name inc ^n <n>) --> (<s> ^n <n> - (+ <n> 1) ^gone x -)"
         " (write <n>)}",
+    ],
+    "already-supported": [
+        "sp {pi (state <s> ^superstate nil -^n) --> (<s> ^operator <o> +) (<o> ^name init)}",
+        "sp {ai (state <s> ^operator.name init) --> (<s> ^n 0 ^note x)}",
+        "sp {p (state <s> ^superstate nil ^n <n> < 2) --> (<s> ^operator <o> +) (<o> ^name inc)}",
+        "sp {a (state <s> ^operator.name inc ^n <n>) --> (<s> ^n <n> - (+ <n> 1) ^note x"
+        " ^note y)}",
+        "sp {b (state <s> ^operator.name inc ^n 1) --> (<s> ^note x -)}",
     ],
     "goal-removal": [
         "sp {p (state <s> ^superstate nil -^done) --> (<s> ^operator <o> +) (<o> ^name a)}",
@@ -157,3 +166,6 @@ def test_the_rules_read_off_the_kernel_hold() -> None:
     assert "hello\n+ (S1 ^x 1 +) (a)\n=>WM: (14: S1 ^x 1)\n" in writes
     assert "hello=>WM: (14: S1 ^x 1)\n" in kernel_trace(CORNERS["writes-before-traces"], None,
                                                          4, 1)
+    supported = kernel_trace(CORNERS["already-supported"], None, 5, 4)
+    assert "+ (S1 ^note x +  :O ) (a) ALREADY SUPPORTED ON TOP LEVEL.  IGNORING.\n" in supported
+    assert "- (S1 ^note x +  :O ) (ai)\n- (S1 ^n 1 +  :O ) (a)\n" in supported
