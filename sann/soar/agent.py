@@ -499,6 +499,7 @@ class Agent:
         self._active: Goal | None = None
         self._active_type = ""
         self._phase_cycles = 0
+        self._inner_goal: Goal | None = None  # the goal the last cycle went down to
         self._justifications = 0
         top = self._ids.new("S", level=1)
         self._top = self._new_goal(top, None)
@@ -689,6 +690,8 @@ class Agent:
         (after the cycle it happened in). An interrupt stops the run when the phase is over,
         as in the kernel (measured)."""
         end = "output" if apply else "decide"
+        if self._phase_cycles == 0:
+            self._inner_goal = None
         if self._phase_cycles == 0 and apply and self.trace_level >= 2 and self._active is None:
             self._emit("\n--- Application Phase ---\n")
         while True:
@@ -782,16 +785,19 @@ class Agent:
         pending assertions of the firing type fire level by level from the active goal down
         (each level's preferences asserted before the next level fires), then the active
         goal's retractions and those of removed goals, then the working-memory phase."""
-        # A cycle of removed goals' retractions alone is an IE cycle at depth 0 (measured)
+        # A cycle of removed goals' retractions alone is an IE cycle, traced at the goal the
+        # last cycle went down to, or at level 0 when that goal is gone (measured)
         shown = "IE" if goal is None else firing
+        last = self._inner_goal
+        traced = goal if goal is not None else last if last is not None and last.alive else None
         if self.trace_level >= 2 and self._phase == "apply":
-            depth = 0 if goal is None else goal.level
+            depth = 0 if traced is None else traced.level
             self._emit_line(
                 f"\t--- Firing Productions ({shown}) For State At Depth {depth} ---\n"
             )
-        if goal is None:
-            if self.trace_level >= 3:
-                self._emit("\n--- Inner Elaboration Phase, active level 0 goal # ---\n")
+        if goal is None and self.trace_level >= 3:
+            where = "0 goal #" if traced is None else f"{traced.level} goal {traced.id}"
+            self._emit(f"\n--- Inner Elaboration Phase, active level {where} ---\n")
         level_goal = goal
         change_level = goal.level if goal is not None else 0
         while level_goal is not None:
@@ -802,6 +808,7 @@ class Agent:
                     f"\n--- Inner Elaboration Phase, active level {level_goal.level}"
                     f" goal {level_goal.id} ---\n"
                 )
+            self._inner_goal = level_goal
             limit = change_level if level_goal is not goal else 0
             if self._fire_level(level_goal, firing, limit) and level_goal.level > change_level:
                 change_level = level_goal.level
