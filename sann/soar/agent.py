@@ -1198,7 +1198,7 @@ class Agent:
         ``o_support``: the wave fired o-assertions (an i-assertion wave makes no o-supported
         preference; a justification may)."""
         justifications, self._new_justifications = self._new_justifications, []
-        insts = [*justifications, *reversed(fired)] if justifications else fired[::-1]
+        insts = [*reversed(justifications), *reversed(fired)] if justifications else fired[::-1]
         tracing = self.trace_level >= 5
         # The kernel takes the o-rejects in the reverse of the order it asserts the rest
         # (measured: '- (S1 ^last-moved other ...)' of the last rule to assert, before the
@@ -2021,7 +2021,9 @@ class Agent:
         ]
         home = self._goal_of_results(results)
         just = Instantiation(
-            f"justify{self._justifications}", None, home, (), bool(operators), True
+            # the kernel spends two numbers on each justification (measured: justify1,
+            # justify3, justify5, ...)
+            f"justify{2 * self._justifications - 1}", None, home, (), bool(operators), True
         )
         just.grounds = grounds
         on_operator = [any(pref.id is op for op in operators) for pref in results]
