@@ -925,7 +925,8 @@ class Agent:
         firings come oldest WME first), so a match is made when its oldest WME of the batch
         enters, and the matches of older WMEs are made later; matches made by no new WME
         (a removal unblocked them) come first, as before. See ``_kernel_key``."""
-        creators = [self._creator(match, start) for match in new]
+        creator = self._creator
+        creators = [creator(match, start) for match in new]
         firsts = [(0, tt) if tt <= start else (1, -tt) for tt, _ in creators]
         if len(set(firsts)) < len(firsts):
             keys = [first + self._kernel_key(match, creator)[1:]
@@ -939,13 +940,18 @@ class Agent:
     def _creator(match: object, start: int) -> tuple[int, int]:
         """The timetag and first index of the match's oldest WME newer than ``start`` (its
         newest WME when none is)."""
-        newest, index = match.newest  # type: ignore[attr-defined]
+        found = match.newest  # type: ignore[attr-defined]
+        newest = found[0]
         if newest <= start:
-            return newest, index
-        for i, wme in enumerate(match.wmes):  # type: ignore[attr-defined]
-            if wme is not None and start < wme.timetag < newest:
-                newest, index = wme.timetag, i
-        return newest, index
+            return found
+        oldest = newest
+        for wme in match.wmes:  # type: ignore[attr-defined]
+            if wme is not None and start < wme.timetag < oldest:
+                oldest = wme.timetag
+        if oldest == newest:
+            return found
+        wmes = match.wmes  # type: ignore[attr-defined]
+        return oldest, next(i for i, w in enumerate(wmes) if w is not None and w.timetag == oldest)
 
     def _retract_matches(self, gone: list, blocked: int = -1) -> None:
         """Schedule the retraction of fired matches that stopped matching, in creation
@@ -1375,6 +1381,7 @@ class Agent:
         """Decide the changed slots until none is left. The trace shows the removals in
         the kernel's order (measured in soar_sml; see ``_order_traced_removals``)."""
         self._phase_timetag = self._timetag
+        tracing = self.trace_level >= 4
         buffer = self._traced_removes
         phase_start = len(buffer)
         context_removals: list[WME] = []
@@ -1404,8 +1411,9 @@ class Agent:
             for slot in reversed(context):
                 slot.changed = False
                 self._update_acceptable_wmes(slot)
-            context_removals += buffer[traced:]
-            del buffer[traced:]
+            if tracing:
+                context_removals += buffer[traced:]
+                del buffer[traced:]
             remove_wme = self._remove_wme
             if removes:
                 self.matcher.mark_removals()
@@ -1416,15 +1424,17 @@ class Agent:
             if self._unlinked:
                 traced = len(buffer)
                 self._collect_unlinked()
-                collected += buffer[traced:]
-                del buffer[traced:]
+                if tracing:
+                    collected += buffer[traced:]
+                    del buffer[traced:]
             for slot in changed:
                 if not slot.prefs and not slot.wmes:
                     self._drop_slot(slot)
             for slot in context:
                 if not slot.prefs and not slot.wmes and not slot.acceptable_wmes:
                     self._collect_garbage(slot)
-        self._order_traced_removals(phase_start, context_removals, collected, diffs_last)
+        if tracing:
+            self._order_traced_removals(phase_start, context_removals, collected, diffs_last)
 
     def _order_traced_removals(self, start: int, context: list[WME], collected: list[WME],
                                diffs_last: bool) -> None:
