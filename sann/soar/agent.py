@@ -471,6 +471,8 @@ class Agent:
         self._traced_removes: list[WME] = []
         # removed goals' link WMEs and their children: traced after the batch's others
         self._traced_late: list[WME] = []
+        # slots whose o-supported preferences a working-memory phase collected (tracing)
+        self._collected_slots: set[tuple[Identifier, object]] = set()
         self._context_changed: Goal | None = None
         self._neg_watch: dict[tuple, list[tuple]] = {}
         # (justification, conjunctive negation, bindings) whose watched WME came this phase
@@ -1384,6 +1386,7 @@ class Agent:
         tracing = self.trace_level >= 4
         buffer = self._traced_removes
         phase_start = len(buffer)
+        self._collected_slots = set()
         context_removals: list[WME] = []
         collected: list[WME] = []
         while self._changed or self._changed_context:
@@ -1446,6 +1449,11 @@ class Agent:
         working-memory phase (``diffs_last``), the kernel collects the goal's structures
         as unlinked: the diffs come after the acceptable-preference WMEs (measured)."""
         buffer = self._traced_removes
+        if self._collected_slots:  # WMEs the diffs removed from collected slots
+            keys = self._collected_slots
+            region = buffer[start:]
+            collected = collected + [w for w in region if (w.id, _vkey(w.attr)) in keys]
+            buffer[start:] = [w for w in region if (w.id, _vkey(w.attr)) not in keys]
         if diffs_last:
             buffer[start:] = context + buffer[start:] + collected
         else:
@@ -1508,6 +1516,8 @@ class Agent:
         phase (measured on the kernel); older i-supported WMEs wait for their
         instantiations to retract."""
         doomed = [pref for bucket in slot.prefs.values() for pref in bucket if pref.o_supported]
+        if doomed and self.trace_level >= 4:
+            self._collected_slots.add((slot.id, _vkey(slot.attr)))
         for pref in doomed:
             self._remove_preference(pref)
         wmes = slot.wmes
