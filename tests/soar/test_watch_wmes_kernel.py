@@ -36,9 +36,11 @@ AGENTS = HERE / "differential" / "agents"
 
 #: Differential agents whose whole watch-4 and watch-5 traces agree with the kernel's.
 FILES = [
-    "agent-commands", "halt-in-substate", "identifier-naming", "max-elaborations",
-    "operator-gone-pe-wave", "operator-rejected-pe-wave", "remove-and-readd", "rhs-math",
-    "tie-numeric-partial", "write-output",
+    "agent-commands", "conflict-impasse", "gds-retraction", "halt-in-substate",
+    "halt-mid-retraction", "identifier-naming", "justification-retraction", "max-elaborations",
+    "operator-gone-pe-wave", "operator-rejected-pe-wave", "remove-and-readd",
+    "result-retracts-justification", "result-retracts-justification-ncc", "rhs-math",
+    "state-no-change", "tie-cheapest", "tie-items-change", "tie-numeric-partial", "write-output",
 ]  # fmt: skip
 
 #: Rules whose traces show one rule of the module docstring each.
@@ -132,11 +134,19 @@ def test_agent_files_trace_as_the_kernel(name: str, level: int) -> None:
 
 
 @pytest.mark.parametrize("level", [4, 5])
-@pytest.mark.parametrize("seed", [0, 1, 4, 6, 8, 9])
+@pytest.mark.parametrize("seed", [0, 1, 4, 5, 6, 8, 9, 10])
 def test_generated_agents_trace_as_the_kernel(seed: int, level: int, tmp_path) -> None:
     path = tmp_path / "agent.soar"
     path.write_text(generated_agent(seed))
     assert_same([], path, level, 15)
+
+
+@pytest.mark.parametrize("level", [4, 5])
+@pytest.mark.parametrize("name", ["hanoi", "blocks", "cups"])
+def test_rule_files_trace_as_the_kernel(name: str, level: int) -> None:
+    """rules/: hanoi with three disks, blocks and cups without input (they wait)."""
+    inputs = (("disks", 3),) if name == "hanoi" else ()
+    assert_same([], HERE.parents[1] / "rules" / f"{name}.soar", level, 40, inputs)
 
 
 @pytest.mark.parametrize("level", [4, 5])
