@@ -930,6 +930,12 @@ class Agent:
         creator = self._creator
         creators = [creator(match, start) for match in new]
         firsts = [(0, tt) if tt <= start else (1, -tt) for tt, _ in creators]
+        if len(new) == 2:  # the usual case, without sorting
+            one, two = firsts
+            if one == two:
+                one = self._kernel_key(new[0], creators[0])[1:]
+                two = self._kernel_key(new[1], creators[1])[1:]
+            return [new[1], new[0]] if two < one else new
         if len(set(firsts)) < len(firsts):
             keys = [first + self._kernel_key(match, creator)[1:]
                     for first, match, creator in zip(firsts, new, creators, strict=True)]
@@ -1236,8 +1242,10 @@ class Agent:
         ignores a new one made on the top level (measured in soar_sml: '+ (S1 ^note x +
         :O ) (a) ALREADY SUPPORTED ON TOP LEVEL.  IGNORING.', and a later o-reject of x
         removes only the older preference)."""
-        slot = self._slot(pref.id, pref.attr, create=False)
-        if slot is None:
+        slots = self._slots.get(pref.id)
+        attr = pref.attr
+        slot = slots.get(attr if type(attr) is not float else (float, attr)) if slots else None
+        if slot is None or pref.type not in slot.prefs:
             return False
         value, referent = _vkey(pref.value), _vkey(pref.referent)
         return any(old.o_supported and _vkey(old.value) == value
@@ -1386,7 +1394,8 @@ class Agent:
         tracing = self.trace_level >= 4
         buffer = self._traced_removes
         phase_start = len(buffer)
-        self._collected_slots = set()
+        if tracing and self._collected_slots:
+            self._collected_slots = set()
         context_removals: list[WME] = []
         collected: list[WME] = []
         while self._changed or self._changed_context:
