@@ -61,6 +61,8 @@ _new = object.__new__
 #: Where a new kernel agent's printer believes its output line to be, and again after
 #: init-soar (measured: its first print wraps as if 17 characters were on the line).
 START_COLUMN = 17
+#: A state's links to its memories: the kernel removes them (and their children) last
+_LINK_ATTRS = ("reward-link", "epmem", "smem")
 
 
 #: Python's young-generation collection threshold that creating an agent sets for the
@@ -358,6 +360,8 @@ class Agent:
             self._run_phase()
             if target is not None and self._decisions >= target and self._phase == "apply":
                 break
+        if self.trace_level >= 4:
+            self._trace_wm_changes()
         self._stopped_message(target)
         return self.stats
 
@@ -486,6 +490,15 @@ class Agent:
         self._refs: dict[Identifier, int] = {}
         self._in_wm_phase = False
         self._phase_timetag = 0
+        # the newest timetag when the matcher's changes were last taken (_collect_changes)
+        self._batch_start = 0
+        # WMEs added and removed since the last trace of working-memory changes (watch 4+)
+        self._traced_adds: list[WME] = []
+        self._traced_removes: list[WME] = []
+        # removed goals' link WMEs and their children: traced after the batch's others
+        self._traced_late: list[WME] = []
+        # slots whose o-supported preferences a working-memory phase collected (tracing)
+        self._collected_slots: set[tuple[Identifier, object]] = set()
         self._context_changed: Goal | None = None
         self._neg_watch: dict[tuple, list[tuple]] = {}
         # (justification, conjunctive negation, bindings) whose watched WME came this phase
@@ -514,6 +527,7 @@ class Agent:
         self._active: Goal | None = None
         self._active_type = ""
         self._phase_cycles = 0
+        self._inner_goal: Goal | None = None  # the goal the last cycle went down to
         self._justifications = 0
         top = self._ids.new("S", level=1)
         self._top = self._new_goal(top, None)
@@ -581,7 +595,7 @@ class Agent:
             self._check_negations(wme)
         self.matcher.add_wme(wme)
         if self.trace_level >= 4:
-            self._emit("\n=>WM: " + trace_wme(wme))
+            self._traced_adds.append(wme)
         return wme
 
     def _remove_wme(self, wme: WME) -> None:
@@ -602,9 +616,23 @@ class Agent:
                 del self._refs[value]
                 self._unlinked.append(value)
         if self.trace_level >= 4:
-            self._emit("\n<=WM: " + trace_wme(wme))
+            self._traced_removes.append(wme)
         if self._dependents or self._gds_index:  # justifications and substates only
             self._substate_wme_gone(wme)
+
+    def _trace_wm_changes(self) -> None:
+        """Print the WME changes buffered since the last call, as the kernel's
+        ``do_buffered_wm_changes`` does at the end of each working-memory phase (measured:
+        additions newest first, then removals, the last requested first; each line ends
+        with a newline)."""
+        adds, removes = self._traced_adds, self._traced_removes
+        if not adds and not removes and not self._traced_late:
+            return
+        removes += self._traced_late
+        self._traced_adds, self._traced_removes, self._traced_late = [], [], []
+        lines = [f"=>WM: {trace_wme(wme)}\n" for wme in reversed(adds)]
+        lines += [f"<=WM: {trace_wme(wme)}\n" for wme in reversed(removes)]
+        self._emit("".join(lines))
 
     def _substate_wme_gone(self, wme: WME) -> None:
         """A WME left: retract the justifications that rest on it and remove the substates
@@ -668,6 +696,8 @@ class Agent:
         if self.trace_level >= 2:
             self._emit("\n--- Input Phase --- \n")
         self._apply_input_ops()
+        if self.trace_level >= 4:
+            self._trace_wm_changes()
         self._collect_changes()
         if self.trace_level >= 2:
             self._emit("\n--- END Input Phase --- \n")
@@ -688,6 +718,8 @@ class Agent:
         (after the cycle it happened in). An interrupt stops the run when the phase is over,
         as in the kernel (measured)."""
         end = "output" if apply else "decide"
+        if self._phase_cycles == 0:
+            self._inner_goal = None
         if self._phase_cycles == 0 and apply and self.trace_level >= 2 and self._active is None:
             self._emit("\n--- Application Phase ---\n")
         while True:
@@ -706,12 +738,26 @@ class Agent:
                 self._end_phase(apply, end)
                 return
             if self._halted:  # an interrupt (_stop) lets the phase finish, as in the kernel
-                if self.trace_level >= 2:
+                # The phase's END line only when the halt came in its last cycle (measured:
+                # 'Change Working Memory (PE) ---\n\nSystem halted.' when IE firings follow).
+                if self.trace_level >= 2 and self._quiescent(apply):
                     self._emit(
                         "\n--- END Application Phase ---\n" if apply
                         else "\n--- END Propose Phase ---\n"
                     )
                 return
+
+    def _quiescent(self, apply: bool) -> bool:
+        """Whether no goal has firings or retractions waiting (without the consistency
+        checks of ``_next_active``)."""
+        if self._nil_retractions:
+            return False
+        goal: Goal | None = self._top
+        while goal is not None:
+            if goal.pending_i or goal.retractions or (apply and goal.pending_o):
+                return False
+            goal = goal.sub
+        return True
 
     def _end_phase(self, apply: bool, end: str) -> None:
         if self.trace_level >= 2:
@@ -767,21 +813,30 @@ class Agent:
         pending assertions of the firing type fire level by level from the active goal down
         (each level's preferences asserted before the next level fires), then the active
         goal's retractions and those of removed goals, then the working-memory phase."""
-        if self.trace_level >= 2 and goal is not None and self._phase == "apply":
+        # A cycle of removed goals' retractions alone is an IE cycle, traced at the goal the
+        # last cycle went down to, or at level 0 when that goal is gone (measured)
+        shown = "IE" if goal is None else firing
+        last = self._inner_goal
+        traced = goal if goal is not None else last if last is not None and last.alive else None
+        if self.trace_level >= 2 and self._phase == "apply":
+            depth = 0 if traced is None else traced.level
             self._emit_line(
-                f"\t--- Firing Productions ({firing}) For State At Depth {goal.level} ---\n"
+                f"\t--- Firing Productions ({shown}) For State At Depth {depth} ---\n"
             )
-        if goal is None:
-            if self.trace_level >= 3:
-                self._emit("\n--- Inner Elaboration Phase, active level 0 goal # ---\n")
+        if goal is None and self.trace_level >= 3:
+            where = "0 goal #" if traced is None else f"{traced.level} goal {traced.id}"
+            self._emit(f"\n--- Inner Elaboration Phase, active level {where} ---\n")
         level_goal = goal
         change_level = goal.level if goal is not None else 0
         while level_goal is not None:
+            if level_goal is not goal and not self._pending_from(level_goal, firing):
+                break  # the kernel goes down the stack only while assertions wait below
             if self.trace_level >= 3:
                 self._emit(
                     f"\n--- Inner Elaboration Phase, active level {level_goal.level}"
                     f" goal {level_goal.id} ---\n"
                 )
+            self._inner_goal = level_goal
             limit = change_level if level_goal is not goal else 0
             if self._fire_level(level_goal, firing, limit) and level_goal.level > change_level:
                 change_level = level_goal.level
@@ -793,12 +848,27 @@ class Agent:
             goal.retractions = []
         for inst in retractions:
             self._retract(inst)
-        if self.trace_level >= 2 and goal is not None and self._phase == "apply":
+        if self.trace_level >= 2 and self._phase == "apply":
             # Not on a fresh line: after a write that did not end its line, the kernel
             # goes on on the same line (measured: "applied\t--- Change Working Memory").
-            self._emit(f"\t--- Change Working Memory ({firing}) ---\n")
+            self._emit(f"\t--- Change Working Memory ({shown}) ---\n")
         self._working_memory_phase()
+        if self.trace_level >= 4:
+            self._trace_wm_changes()
         self._collect_changes()
+
+    def _pending_from(self, goal: Goal, firing: str) -> bool:
+        """Whether ``goal`` or a goal below it has retractions or assertions of the
+        ``firing`` type waiting (measured: the kernel prints a lower level's 'Inner
+        Elaboration Phase' header only then)."""
+        level_goal: Goal | None = goal
+        while level_goal is not None:
+            if level_goal.retractions or (
+                level_goal.pending_i if firing == "IE" else level_goal.pending_o
+            ):
+                return True
+            level_goal = level_goal.sub
+        return False
 
     def _fire_level(self, goal: Goal, firing: str, change_level: int) -> bool:
         """Fire one level's pending assertions; return whether any were pending.
@@ -849,6 +919,8 @@ class Agent:
         self._decide_context_slots()
         self._decisions += 1
         self._collect_changes()
+        if self.trace_level >= 4:
+            self._trace_wm_changes()
         if self.trace_level >= 2:
             self._emit("\n--- END Decision Phase ---\n")
         self._phase = "apply"
@@ -866,12 +938,54 @@ class Agent:
         node is activated first); firing then takes them newest first, like the kernel's
         match-set lists."""
         new, gone = self.matcher.take_changes()
+        start, self._batch_start = self._batch_start, self._timetag
         if gone:
             self._retract_matches(gone, self.matcher.blocked_retractions)
         if new:
             if len(new) > 1 and not in_match_order:
-                new = self._kernel_sorted(new, new)
+                new = self._batch_sorted(new, start)
             self._queue_matches(new)
+
+    def _batch_sorted(self, new: list, start: int) -> list:
+        """New matches in the order the kernel's Rete made them from one batch of WME
+        changes (the WMEs newer than ``start``). The kernel adds a batch to its Rete newest
+        first (measured: three ``(S1 ^x v)`` made by one firing each match one rule, whose
+        firings come oldest WME first), so a match is made when its oldest WME of the batch
+        enters, and the matches of older WMEs are made later; matches made by no new WME
+        (a removal unblocked them) come first, as before. See ``_kernel_key``."""
+        creator = self._creator
+        creators = [creator(match, start) for match in new]
+        firsts = [(0, tt) if tt <= start else (1, -tt) for tt, _ in creators]
+        if len(new) == 2:  # the usual case, without sorting
+            one, two = firsts
+            if one == two:
+                one = self._kernel_key(new[0], creators[0])[1:]
+                two = self._kernel_key(new[1], creators[1])[1:]
+            return [new[1], new[0]] if two < one else new
+        if len(set(firsts)) < len(firsts):
+            keys = [first + self._kernel_key(match, creator)[1:]
+                    for first, match, creator in zip(firsts, new, creators, strict=True)]
+        else:
+            keys = firsts
+        order = sorted(range(len(new)), key=keys.__getitem__)
+        return [new[k] for k in order]
+
+    @staticmethod
+    def _creator(match: object, start: int) -> tuple[int, int]:
+        """The timetag and first index of the match's oldest WME newer than ``start`` (its
+        newest WME when none is)."""
+        found = match.newest  # type: ignore[attr-defined]
+        newest = found[0]
+        if newest <= start:
+            return found
+        oldest = newest
+        for wme in match.wmes:  # type: ignore[attr-defined]
+            if wme is not None and start < wme.timetag < oldest:
+                oldest = wme.timetag
+        if oldest == newest:
+            return found
+        wmes = match.wmes  # type: ignore[attr-defined]
+        return oldest, next(i for i, w in enumerate(wmes) if w is not None and w.timetag == oldest)
 
     def _retract_matches(self, gone: list, blocked: int = -1) -> None:
         """Schedule the retraction of fired matches that stopped matching, in creation
@@ -985,19 +1099,26 @@ class Agent:
         order = sorted(range(len(items)), key=keys.__getitem__, reverse=newest_first)
         return [items[k] for k in order]
 
-    def _kernel_key(self, match: object) -> tuple[int, ...]:
+    def _kernel_key(self, match: object, creator: tuple[int, int] | None = None
+                    ) -> tuple[int, ...]:
         """The order the kernel's Rete makes new matches in: by the newest matched WME, then
         by the alpha memory it entered (``(* ^attr *)`` before ``(* ^attr value)``) and the
         path from the join it activated down to the production (``KernelOrder``).  A WME
         matched by several conditions makes the match in the last alpha memory it enters,
-        at the first of them in the kernel's order."""
-        newest, index = match.newest  # type: ignore[attr-defined]
+        at the first of them in the kernel's order. ``creator``: the WME that made the
+        match and its index, when not the newest (see ``_batch_sorted``)."""
+        newest, index = creator or match.newest  # type: ignore[attr-defined]
         places = self._kernel_places.get(match.production.name)  # type: ignore[attr-defined]
         if places is None:
             return (newest,)
         place = places.get(index)
         if place is None:
             return (newest,)
+        if newest <= place[6]:
+            # Made when the production was loaded, in the order of loading (measured: of
+            # two such rules with the same conditions, a new WME that blocks both retracts
+            # the first loaded first, as it does the match made first at run time).
+            return (newest, -1, -place[3][-1])
         wmes = match.wmes  # type: ignore[attr-defined]
         if place[4]:  # the WME may be in other conditions too
             wme = wmes[index]
@@ -1073,16 +1194,14 @@ class Agent:
     def _retract(self, inst: Instantiation) -> None:
         """Remove an instantiation's i-supported preferences (o-supported ones stay)."""
         trace = self.trace_level
+        if trace >= 3:
+            self._trace_retraction(inst)
         remove = self._remove_preference
-        removed = False
-        for pref in inst.prefs:
+        # In the order the kernel made them (inst.prefs is newest first): the slots they
+        # leave are decided in that order's reverse, which the trace shows (measured:
+        # <=WM: (37: O4 ^name buy), then (38: O4 ^item I5) for a rule that made both).
+        for pref in reversed(inst.prefs):
             if pref.live and not pref.o_supported:
-                if trace >= 3:
-                    if not removed:
-                        self._emit(f"\nRetracting {inst.name}\n")
-                    if trace >= 5:
-                        self._emit("\n -" + trace_preference(pref))
-                removed = True
                 remove(pref)
         if inst.goal.level > 1 and not any(p.live for p in inst.prefs):
             inst.goal.insts.pop(inst, None)
@@ -1100,6 +1219,15 @@ class Agent:
                 if bucket is not None and inst in bucket:
                     bucket.remove(inst)
 
+    def _trace_retraction(self, inst: Instantiation) -> None:
+        """``Retracting name`` when the instantiation loses a preference; at watch 5 the
+        preferences it loses, in the order they were asserted (measured)."""
+        gone = [pref for pref in reversed(inst.prefs) if pref.live and not pref.o_supported]
+        if gone:
+            self._emit(f"\nRetracting {inst.name}\n")
+            if self.trace_level >= 5:
+                self._emit_line("".join(trace_preference("-", pref) for pref in gone))
+
     def _assert_preferences(self, fired: list[Instantiation], o_support: bool) -> None:
         """Let o-supported rejects remove the older preferences for their values, then add
         the new preferences to their slots, both in the kernel's order (a rule may remove
@@ -1110,14 +1238,15 @@ class Agent:
         ``o_support``: the wave fired o-assertions (an i-assertion wave makes no o-supported
         preference; a justification may)."""
         justifications, self._new_justifications = self._new_justifications, []
-        insts = [*justifications, *reversed(fired)] if justifications else fired[::-1]
+        insts = [*reversed(justifications), *reversed(fired)] if justifications else fired[::-1]
         tracing = self.trace_level >= 5
-        o_rejects = [pref for inst in insts for pref in reversed(inst.prefs)
+        # The kernel takes the o-rejects in the reverse of the order it asserts the rest
+        # (measured: '- (S1 ^last-moved other ...)' of the last rule to assert, before the
+        # first rule's '- (D1 ^on a ...)' and '- (S1 ^moves 0 ...)').
+        o_rejects = [pref for inst in reversed(insts) for pref in inst.prefs
                      if pref.o_supported and pref.type == REJECT
                      ] if o_support or justifications else ()
-        for pref in o_rejects:
-            if tracing:
-                self._emit("\n+" + trace_preference(pref))
+        for pref in o_rejects:  # not traced itself (measured): what it removes is
             self._o_reject(pref)
             pref.inst = None  # type: ignore[assignment]  # never in a slot: done with
         add = self._add_preference
@@ -1125,9 +1254,30 @@ class Agent:
             for pref in reversed(inst.prefs):
                 if pref.inst is None:  # an o-reject, done with above
                     continue
+                if pref.o_supported and inst.goal.level == 1 and self._already_supported(pref):
+                    if tracing:
+                        self._emit_line(trace_preference("+", pref)[:-1]
+                                        + " ALREADY SUPPORTED ON TOP LEVEL.  IGNORING.\n")
+                    continue
                 if tracing:
-                    self._emit("\n+" + trace_preference(pref))
+                    self._emit_line(trace_preference("+", pref))
                 add(pref)
+
+    def _already_supported(self, pref: Preference) -> bool:
+        """Whether the slot already holds the same o-supported preference: the kernel then
+        ignores a new one made on the top level (measured in soar_sml: '+ (S1 ^note x +
+        :O ) (a) ALREADY SUPPORTED ON TOP LEVEL.  IGNORING.', and a later o-reject of x
+        removes only the older preference)."""
+        slots = self._slots.get(pref.id)
+        attr = pref.attr
+        slot = slots.get(attr if type(attr) is not float else (float, attr)) if slots else None
+        if slot is None or pref.type not in slot.prefs:
+            return False
+        value, referent = _vkey(pref.value), _vkey(pref.referent)
+        return any(old.o_supported and _vkey(old.value) == value
+                   and type(old.value) is type(pref.value)
+                   and _vkey(old.referent) == referent
+                   for old in slot.prefs.get(pref.type, ()))
 
     def _slot(self, ident: Identifier, attr: Symbol, create: bool = True) -> Slot | None:
         slots = self._slots.get(ident)
@@ -1229,18 +1379,18 @@ class Agent:
             ]
         for pref in doomed:
             if self.trace_level >= 5:
-                self._emit("\n-" + trace_preference(pref))
+                self._emit_line(trace_preference("-", pref))
             self._remove_preference(pref)
 
     # ------------------------------------------------------------- WM phase
 
-    def _working_memory_phase(self) -> None:
+    def _working_memory_phase(self, diffs_last: bool = False) -> None:
         """Turn changed slots into WME changes, in the kernel's timetag order."""
         if self._in_wm_phase:
             return
         self._in_wm_phase = True
         try:
-            self._working_memory_changes()
+            self._working_memory_changes(diffs_last)
         finally:
             self._in_wm_phase = False
         while self._dead_ids:
@@ -1263,8 +1413,17 @@ class Agent:
             if negation_matches(element, wmes, bindings):
                 self._schedule_retraction(just)
 
-    def _working_memory_changes(self) -> None:
+    def _working_memory_changes(self, diffs_last: bool = False) -> None:
+        """Decide the changed slots until none is left. The trace shows the removals in
+        the kernel's order (measured in soar_sml; see ``_order_traced_removals``)."""
         self._phase_timetag = self._timetag
+        tracing = self.trace_level >= 4
+        buffer = self._traced_removes
+        phase_start = len(buffer)
+        if tracing and self._collected_slots:
+            self._collected_slots = set()
+        context_removals: list[WME] = []
+        collected: list[WME] = []
         while self._changed or self._changed_context:
             changed, self._changed = self._changed, []
             adds: list[tuple[Slot, object, Symbol]] = []
@@ -1286,9 +1445,13 @@ class Agent:
             if adds:
                 self._add_slot_wmes(adds)
             context, self._changed_context = self._changed_context, []
+            traced = len(buffer)
             for slot in reversed(context):
                 slot.changed = False
                 self._update_acceptable_wmes(slot)
+            if tracing:
+                context_removals += buffer[traced:]
+                del buffer[traced:]
             remove_wme = self._remove_wme
             if removes:
                 self.matcher.mark_removals()
@@ -1297,13 +1460,39 @@ class Agent:
             if self._pending_gds:
                 self._extend_gds()
             if self._unlinked:
+                traced = len(buffer)
                 self._collect_unlinked()
+                if tracing:
+                    collected += buffer[traced:]
+                    del buffer[traced:]
             for slot in changed:
                 if not slot.prefs and not slot.wmes:
                     self._drop_slot(slot)
             for slot in context:
                 if not slot.prefs and not slot.wmes and not slot.acceptable_wmes:
                     self._collect_garbage(slot)
+        if tracing:
+            self._order_traced_removals(phase_start, context_removals, collected, diffs_last)
+
+    def _order_traced_removals(self, start: int, context: list[WME], collected: list[WME],
+                               diffs_last: bool) -> None:
+        """Lay the phase's traced removals (from ``start``) out in the kernel's order of
+        requests: the slot diffs' (its ``decide_non_context_slots``), those of the operator
+        slots' acceptable-preference WMEs (measured: '(15: S1 ^operator O1 +)', '(16: S1
+        ^operator O1)', then '(14: O1 ^name init)' in the trace, which reverses them), then
+        those of identifiers no longer linked. After a goal removed outside a
+        working-memory phase (``diffs_last``), the kernel collects the goal's structures
+        as unlinked: the diffs come after the acceptable-preference WMEs (measured)."""
+        buffer = self._traced_removes
+        if self._collected_slots:  # WMEs the diffs removed from collected slots
+            keys = self._collected_slots
+            region = buffer[start:]
+            collected = collected + [w for w in region if (w.id, _vkey(w.attr)) in keys]
+            buffer[start:] = [w for w in region if (w.id, _vkey(w.attr)) not in keys]
+        if diffs_last:
+            buffer[start:] = context + buffer[start:] + collected
+        else:
+            buffer += context + collected
 
     def _add_slot_wmes(self, adds: list[tuple[Slot, object, Symbol]]) -> None:
         """Make the WMEs the slot diffs decided on: ``(slot, value key, value)``; the diff
@@ -1329,10 +1518,11 @@ class Agent:
             goals = self._gds_index.pop(wme, None)
             for goal in goals or ():
                 if goal.alive:
-                    if self.trace_level >= 2:
-                        self._emit(
-                            f"\nRemoving state {goal.id} because element in GDS changed."
-                            f" WME: {trace_wme(wme)}"
+                    if self.trace_level >= 2:  # measured
+                        self._emit_line(
+                            f"Removing state {goal.id} because element in GDS changed."
+                            f" WME: {trace_wme(wme)}\n\n    REMOVING GOAL [{goal.id}] due to"
+                            f" change in GDS WME {trace_wme(wme)}\n"
                         )
                     self._remove_goal(goal)
                     removed = True
@@ -1361,6 +1551,8 @@ class Agent:
         phase (measured on the kernel); older i-supported WMEs wait for their
         instantiations to retract."""
         doomed = [pref for bucket in slot.prefs.values() for pref in bucket if pref.o_supported]
+        if doomed and self.trace_level >= 4:
+            self._collected_slots.add((slot.id, _vkey(slot.attr)))
         for pref in doomed:
             self._remove_preference(pref)
         wmes = slot.wmes
@@ -1464,7 +1656,9 @@ class Agent:
                 if key not in wanted:
                     wanted[key] = value
         current = slot.acceptable_wmes
-        gone = [key for key in current if key not in wanted]
+        # Newest first, as the kernel's list of them (measured: the trace shows the oldest
+        # removed first, the selected operator's WME just after its acceptable one).
+        gone = [key for key in reversed(current) if key not in wanted]
         for key in gone:
             wme = current.pop(key)
             self._operator_proposal_gone(slot, wme)
@@ -1481,16 +1675,21 @@ class Agent:
         if self.trace_level >= 2:
             self._emit(
                 "\n        REMOVING: Operator from context slot (proposal no longer matches): "
-                + trace_wme(wme)
+                + trace_wme(wme) + "\n"
             )
         goal = self._goals[slot.id]
-        if goal.sub is not None:
+        traced = len(self._traced_removes)
+        sub = goal.sub
+        if sub is not None:
             if self.trace_level >= 2:
-                self._emit(f"\nRemoving state {goal.sub.id} because of an operator removal.")
-            self._remove_goal(goal.sub)
+                self._emit_line(f"Removing state {sub.id} because of an operator removal.\n")
+            self._remove_goal(sub)
         del slot.wmes[_vkey(wme.value)]
         self._context_changed_at(slot.id)
         self._remove_wme(selected)
+        if sub is not None and self.trace_level >= 4:
+            # the kernel removes the operator before the substate (measured)
+            self._traced_removes.insert(traced, self._traced_removes.pop())
 
     def _collect_garbage(self, slot: Slot) -> None:
         if slot.is_empty() and not slot.is_context:
@@ -1575,6 +1774,9 @@ class Agent:
             self._remember_source(wme, slot, (REQUIRE, ACCEPTABLE))
         name = self._operator_name(value)
         self._operator_names.append(name if name is not None else "?")
+        self._collect_changes()  # before the WME trace: it may warn (measured)
+        if self.trace_level >= 4:
+            self._trace_wm_changes()  # the kernel traces the decision after its WM changes
         if self.trace_level >= 1:
             indent = " " + "   " * goal.level
             label = f" ({symbol_text(name)})" if name is not None else ""
@@ -1617,6 +1819,9 @@ class Agent:
         sub.arch_wmes.append(self._add_arch(ident, "choices", choices))
         sub.arch_wmes.append(self._add_arch(ident, "quiescence", "t"))
         self._update_items(sub, candidates, slot)
+        self._collect_changes()  # before the WME trace: it may warn (measured)
+        if self.trace_level >= 4:
+            self._trace_wm_changes()  # the kernel traces the decision after its WM changes
         if self.trace_level >= 1:
             indent = " " + "   " * goal.level
             kind = (
@@ -1660,14 +1865,17 @@ class Agent:
             goal.op_slot.wmes.clear()
             self._remove_wme(selected)
         for inst in list(goal.insts):
-            for pref in inst.prefs:
+            for pref in reversed(inst.prefs):  # as made (measured: the watch-5 trace)
                 if pref.live:
                     if self.trace_level >= 5:
-                        self._emit("\n-" + trace_preference(pref))
+                        self._emit_line(trace_preference("-", pref))
                     self._remove_preference(pref)
         goal.insts.clear()
+        traced = len(self._traced_removes)
         for wme in list(goal.items.values()) + list(goal.counts.values()) + goal.arch_wmes:
             self._remove_arch(wme)
+        if self.trace_level >= 4:
+            self._trace_goal_removal(goal, traced)
         goal.items.clear()
         goal.counts.clear()
         for match in list(goal.pending_i) + list(goal.pending_o):
@@ -1688,7 +1896,33 @@ class Agent:
         del self._goals[goal.id]
         self._dead_ids.append(goal.id)
         if not self._in_wm_phase:
-            self._working_memory_phase()
+            self._working_memory_phase(diffs_last=True)
+
+    def _trace_goal_removal(self, goal: Goal, start: int) -> None:
+        """Put the removed goal's architecture WMEs (traced from ``start`` on) in the
+        kernel's order of removal (measured in soar_sml; the trace shows it reversed): its
+        ^item WMEs with their count, its ^non-numeric ones with theirs, its impasse WMEs
+        (type, superstate, attribute, impasse, choices, quiescence), each group newest
+        first; then, after the
+        batch's other removals, its ^reward-link, ^epmem and ^smem WMEs newest first, and
+        the epmem and smem links' children, each link's newest first."""
+        group = self._newest_first
+        items = group([*goal.items.values(), *goal.counts.values()])
+        items = ([w for w in items if w.attr in ("item", "item-count")]
+                 + [w for w in items if w.attr not in ("item", "item-count")])
+        own = [w for w in goal.arch_wmes if w.id is goal.id]
+        links = group(w for w in own if w.attr in _LINK_ATTRS)
+        early = items + group(w for w in own if w.attr not in _LINK_ATTRS)
+        late = links + [child for link in reversed(links) for child in
+                        group(w for w in goal.arch_wmes if w.id is link.value)]
+        placed = {id(wme) for wme in early + late}
+        kept = [wme for wme in self._traced_removes[start:] if id(wme) not in placed]
+        self._traced_removes[start:] = early + kept
+        self._traced_late += late
+
+    @staticmethod
+    def _newest_first(wmes: Iterable[WME]) -> list[WME]:
+        return sorted(wmes, key=lambda wme: -wme.timetag)
 
     def _consistent_through(self, limit: Goal | None) -> bool:
         """Check decisions from the top down to ``limit`` (the bottom if None); remove the
@@ -1697,22 +1931,26 @@ class Agent:
         while goal is not None:
             if not self._decision_consistent(goal):
                 if self.trace_level >= 2 and (goal.sub is not None or goal.selected()):
-                    self._emit_line(
-                        f"Removing substates of {goal.id} because the operator last selected"
-                        f" in {goal.id} is not\nconsistent with the current preferences.\n"
-                    )
-                    if self.trace_level >= 3:
-                        self._emit(
-                            f"\n       REMOVING CONTEXT SLOT: Slot Identifier [{goal.id}] and"
-                            " attribute [operator]\n\n          Decision for goal"
-                            f" [{goal.id}] is inconsistent.  Replacing it with....\n"
-                        )
+                    self._trace_inconsistent(goal)
                 self._remove_current_decision(goal)
                 return False
             if goal is limit:
                 break
             goal = goal.sub
         return True
+
+    def _trace_inconsistent(self, goal: Goal) -> None:
+        """What the kernel prints at watch 2 and more when it removes an inconsistent
+        decision (measured in soar_sml): the 'REMOVING CONTEXT SLOT' line only when no
+        operator was selected (an impasse stood there)."""
+        text = (f"Removing substates of {goal.id} because the operator last selected"
+                f" in {goal.id} is not\nconsistent with the current preferences.\n")
+        if goal.selected() is None:
+            text += (f"\n       REMOVING CONTEXT SLOT: Slot Identifier [{goal.id}] and"
+                     " attribute [operator]\n")
+        text += (f"\n          Decision for goal [{goal.id}] is inconsistent.  Replacing it"
+                 " with....\n")
+        self._emit_line(text)
 
     def _decision_consistent(self, goal: Goal) -> bool:
         slot = goal.op_slot
@@ -1746,14 +1984,20 @@ class Agent:
     def _remove_current_decision(self, goal: Goal) -> None:
         if goal.sub is None and goal.selected() is None:
             return
+        traced = len(self._traced_removes)
         if goal.sub is not None:
             self._remove_goal(goal.sub)
         selected = goal.selected()
         if selected is not None:
             goal.op_slot.wmes.clear()
             self._remove_wme(selected)
+            if self.trace_level >= 4:  # the kernel removes it before the substates
+                self._traced_removes.remove(selected)
+                self._traced_removes.insert(traced, selected)
         self._context_changed_at(goal.id)
         self._collect_changes()
+        if self.trace_level >= 4:
+            self._trace_wm_changes()
 
     # ------------------------------------------------------------- results, GDS
 
@@ -1832,7 +2076,9 @@ class Agent:
         ]
         home = self._goal_of_results(results)
         just = Instantiation(
-            f"justify{self._justifications}", None, home, (), bool(operators), True
+            # the kernel spends two numbers on each justification (measured: justify1,
+            # justify3, justify5, ...)
+            f"justify{2 * self._justifications - 1}", None, home, (), bool(operators), True
         )
         just.grounds = grounds
         on_operator = [any(pref.id is op for op in operators) for pref in results]

@@ -2601,7 +2601,9 @@ class KernelOrder:
     a WME makes through that condition is made in the order of the path keys, except that
     a join whose parent memory was empty is unlinked from its alpha memory and relinked
     at the tail when the memory gets a token: its place is then the newest WME of the
-    conditions before it, when that is newer than the join (``Agent._kernel_key``)."""
+    conditions before it, when that is newer than the join (``Agent._kernel_key``).  The
+    tuple also holds the twin conditions, the condition's kernel position and when the
+    production was loaded (its matches of older WMEs were made then, in loading order)."""
 
     def __init__(self) -> None:
         from sann.soar import reorder
@@ -2672,7 +2674,7 @@ class KernelOrder:
                 twins = tuple(j for j, _, _ in joins if j != index
                               and _same_alpha(cond, conditions[j]))  # type: ignore[arg-type]
                 places[index] = (mask, before, join.born, (join.serial, *below[length:]),
-                                 twins, position)
+                                 twins, position, pnode.born)
         self._places[production.name] = places  # shared with the caller: see restart
         return places
 
@@ -2684,8 +2686,8 @@ class KernelOrder:
             node.born = 0
             stack.extend(node.children.values())
         for places in self._places.values():
-            for index, (mask, before, _, key, twins, position) in list(places.items()):
-                places[index] = (mask, before, 0, key, twins, position)
+            for index, (mask, before, _, key, twins, position, _) in list(places.items()):
+                places[index] = (mask, before, 0, key, twins, position, 0)
 
     def remove(self, name: str) -> None:
         self._places.pop(name, None)

@@ -31,16 +31,21 @@ def trace_wme(wme: WME) -> str:
     )
 
 
-def trace_preference(pref: object) -> str:
-    """`` (S1 ^count 0 +  :O ) (apply*init)`` like the kernel's preference trace."""
+def trace_preference(sign: str, pref: object) -> str:
+    """``+ (S1 ^count 0 +  :O ) (apply*init)\n``: the kernel's watch-5 line for a
+    preference asserted (``sign`` '+') or removed ('-'); one made in a substate says its
+    level, ``+ (S2 ^local yes +) [level 2] (s*elab)`` (measured in soar_sml)."""
     p = pref  # a Preference; typed loosely to avoid an import cycle
     kind = p.type[-1]  # type: ignore[attr-defined]
     referent = p.referent  # type: ignore[attr-defined]
     ref = f" {symbol_text(referent)}" if referent is not None else ""
     support = "  :O " if p.o_supported else ""  # type: ignore[attr-defined]
+    inst = p.inst  # type: ignore[attr-defined]
+    level = inst.goal.level
+    where = f" [level {level}]" if level > 1 else ""
     return (
-        f" ({symbol_text(p.id)} ^{symbol_text(p.attr)} {symbol_text(p.value)}"  # type: ignore[attr-defined]
-        f" {kind}{ref}{support}) ({p.inst.name})"  # type: ignore[attr-defined]
+        f"{sign} ({symbol_text(p.id)} ^{symbol_text(p.attr)} {symbol_text(p.value)}"  # type: ignore[attr-defined]
+        f" {kind}{ref}{support}){where} ({inst.name})\n"
     )
 
 
