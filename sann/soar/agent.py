@@ -1271,13 +1271,15 @@ class Agent:
         slots = self._slots.get(pref.id)
         attr = pref.attr
         slot = slots.get(attr if type(attr) is not float else (float, attr)) if slots else None
-        if slot is None or pref.type not in slot.prefs:
+        bucket = slot.prefs.get(pref.type) if slot is not None else None
+        if not bucket:
             return False
-        value, referent = _vkey(pref.value), _vkey(pref.referent)
-        return any(old.o_supported and _vkey(old.value) == value
-                   and type(old.value) is type(pref.value)
-                   and _vkey(old.referent) == referent
-                   for old in slot.prefs.get(pref.type, ()))
+        value, referent = pref.value, pref.referent
+        for old in bucket:  # 1 and 1.0 are different symbols: the types must agree too
+            if (old.o_supported and old.value == value and type(old.value) is type(value)
+                    and old.referent == referent and type(old.referent) is type(referent)):
+                return True
+        return False
 
     def _slot(self, ident: Identifier, attr: Symbol, create: bool = True) -> Slot | None:
         slots = self._slots.get(ident)
