@@ -740,11 +740,8 @@ class Agent:
             if self._halted:  # an interrupt (_stop) lets the phase finish, as in the kernel
                 # The phase's END line only when the halt came in its last cycle (measured:
                 # 'Change Working Memory (PE) ---\n\nSystem halted.' when IE firings follow).
-                if self.trace_level >= 2 and self._quiescent(apply):
-                    self._emit(
-                        "\n--- END Application Phase ---\n" if apply
-                        else "\n--- END Propose Phase ---\n"
-                    )
+                if self._quiescent(apply):
+                    self._trace_phase_end(apply)
                 return
 
     def _quiescent(self, apply: bool) -> bool:
@@ -759,11 +756,14 @@ class Agent:
             goal = goal.sub
         return True
 
-    def _end_phase(self, apply: bool, end: str) -> None:
+    def _trace_phase_end(self, apply: bool) -> None:
         if self.trace_level >= 2:
             self._emit(
                 "\n--- END Application Phase ---\n" if apply else "\n--- END Propose Phase ---\n"
             )
+
+    def _end_phase(self, apply: bool, end: str) -> None:
+        self._trace_phase_end(apply)
         self._phase = end
         self._active = None
         self._active_type = ""
