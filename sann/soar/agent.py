@@ -331,10 +331,12 @@ class Agent:
             self._emit(line)
             return
         io = self._io_id
-        wmes = sorted(self._wm.values(), key=lambda w: w.timetag, reverse=True)
-        state = "".join(f"=>WM: {trace_wme(w)}\n" for w in wmes if io not in (w.id, w.value))
-        links = "".join(f"=>WM: {trace_wme(w)}\n" for w in wmes if io in (w.id, w.value))
-        self._emit(state + line + links)
+        wmes = sorted(self._wm.values(), key=lambda w: w.timetag)
+        self._traced_adds = [w for w in wmes if io not in (w.id, w.value)]
+        self._trace_wm_changes()
+        self._emit(line)
+        self._traced_adds = [w for w in wmes if io in (w.id, w.value)]
+        self._trace_wm_changes()
 
     def _release_slots(self) -> None:
         """Break the cycles of the preferences about to be dropped (a live preference, its
