@@ -19,6 +19,7 @@ import gc
 import os
 import sys
 import weakref
+from bisect import bisect_left
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import TextIO
@@ -494,6 +495,8 @@ class Agent:
         self._phase_timetag = 0
         # the newest timetag when the matcher's changes were last taken (_collect_changes)
         self._batch_start = 0
+        # every earlier _batch_start that began a batch of new WMEs (see _entry_rank)
+        self._batch_starts: list[int] = []
         # WMEs added and removed since the last trace of working-memory changes (watch 4+)
         self._traced_adds: list[WME] = []
         self._traced_removes: list[WME] = []
@@ -941,6 +944,8 @@ class Agent:
         match-set lists."""
         new, gone = self.matcher.take_changes()
         start, self._batch_start = self._batch_start, self._timetag
+        if start != self._timetag:
+            self._batch_starts.append(start)
         if gone:
             self._retract_matches(gone, self.matcher.blocked_retractions)
         if new:
@@ -961,12 +966,14 @@ class Agent:
         if len(new) == 2:  # the usual case, without sorting
             one, two = firsts
             if one == two:
-                one = self._kernel_key(new[0], creators[0])[1:]
-                two = self._kernel_key(new[1], creators[1])[1:]
+                one, two = _same_join_linked([
+                    one + self._kernel_key(new[0], creators[0], True)[1:],
+                    two + self._kernel_key(new[1], creators[1], True)[1:]])
             return [new[1], new[0]] if two < one else new
         if len(set(firsts)) < len(firsts):
-            keys = [first + self._kernel_key(match, creator)[1:]
-                    for first, match, creator in zip(firsts, new, creators, strict=True)]
+            keys = _same_join_linked([
+                first + self._kernel_key(match, creator, True)[1:]
+                for first, match, creator in zip(firsts, new, creators, strict=True)])
         else:
             keys = firsts
         order = sorted(range(len(new)), key=keys.__getitem__)
@@ -1101,14 +1108,15 @@ class Agent:
         order = sorted(range(len(items)), key=keys.__getitem__, reverse=newest_first)
         return [items[k] for k in order]
 
-    def _kernel_key(self, match: object, creator: tuple[int, int] | None = None
-                    ) -> tuple[int, ...]:
+    def _kernel_key(self, match: object, creator: tuple[int, int] | None = None,
+                    tokens: bool = False) -> tuple:
         """The order the kernel's Rete makes new matches in: by the newest matched WME, then
         by the alpha memory it entered (``(* ^attr *)`` before ``(* ^attr value)``) and the
         path from the join it activated down to the production (``KernelOrder``).  A WME
         matched by several conditions makes the match in the last alpha memory it enters,
         at the first of them in the kernel's order. ``creator``: the WME that made the
-        match and its index, when not the newest (see ``_batch_sorted``)."""
+        match and its index, when not the newest (see ``_batch_sorted``); ``tokens``: order
+        the matches one WME makes at one join too (``_token_order``)."""
         newest, index = creator or match.newest  # type: ignore[attr-defined]
         places = self._kernel_places.get(match.production.name)  # type: ignore[attr-defined]
         if places is None:
@@ -1134,7 +1142,10 @@ class Agent:
             other_wme = wmes[j]
             if other_wme is not None and other_wme.timetag > linked:
                 linked = other_wme.timetag
-        return (newest, place[0], linked, place[3])
+        if not tokens:
+            return (newest, place[0], linked, place[3])
+        return (newest, place[0], linked, place[3],
+                *_token_order(wmes, place, self._batch_starts))
 
     def _schedule_retraction(self, inst: Instantiation) -> None:
         if inst.retracted:
@@ -2314,6 +2325,42 @@ class Agent:
 
     def __repr__(self) -> str:
         return f"<Agent {self.name}: {len(self._productions)} productions, {len(self._wm)} wmes>"
+
+
+def _same_join_linked(keys: list[tuple]) -> list[tuple]:
+    """Keys ``(first, *_kernel_key[1:])`` with one relinking time for the matches made at
+    the same join (same creating WME, alpha memory and path): the kernel relinks a join
+    once, when its parent memory gets its first token, so these matches go in the order of
+    their tokens (``_token_order``), not of their own WMEs (all get the latest of them: the
+    first token of a batch enters first)."""
+    latest: dict[tuple, object] = {}
+    for key in keys:
+        if len(key) > 5:
+            group = (key[0], key[1], key[2], key[4])
+            if group not in latest or latest[group] < key[3]:  # type: ignore[operator]
+                latest[group] = key[3]
+    return [(*key[:3], latest[(key[0], key[1], key[2], key[4])], *key[4:]) if len(key) > 5
+            else key for key in keys]
+
+
+def _entry_rank(wme: object, starts: list[int]) -> tuple[int, int]:
+    """When the kernel's Rete took ``wme`` in, as a sort key, latest first: batch after
+    batch (``starts``: the timetag before each), a batch's WMEs newest first."""
+    if wme is None:
+        return (1, 0)
+    timetag = wme.timetag  # type: ignore[attr-defined]
+    return (-bisect_left(starts, timetag), timetag)
+
+
+def _token_order(wmes: tuple, place: tuple, starts: list[int]) -> tuple:
+    """The order in which one WME's activation of a join makes several matches, as the
+    kernel's Rete does (measured in soar_sml: two ``^thing`` WMEs of one firing, then a
+    ``^count`` joined after them, fire the proposal of the older ``^thing`` first). Its
+    memories list items newest first: a right activation visits the parent's tokens latest
+    made first, a left activation the alpha memory's WMEs latest entered first, at every
+    join below too. A token was made when its last WME entered."""
+    token = min((_entry_rank(wmes[j], starts) for j in place[1]), default=(1, 0))
+    return (token, *[_entry_rank(wmes[j], starts) for j in place[7]])
 
 
 class _JustificationMatch:

@@ -2602,8 +2602,9 @@ class KernelOrder:
     a join whose parent memory was empty is unlinked from its alpha memory and relinked
     at the tail when the memory gets a token: its place is then the newest WME of the
     conditions before it, when that is newer than the join (``Agent._kernel_key``).  The
-    tuple also holds the twin conditions, the condition's kernel position and when the
-    production was loaded (its matches of older WMEs were made then, in loading order)."""
+    tuple also holds the twin conditions, the condition's kernel position, when the
+    production was loaded (its matches of older WMEs were made then, in loading order) and
+    the written indexes of the positive conditions after it (``Agent._token_order``)."""
 
     def __init__(self) -> None:
         from sann.soar import reorder
@@ -2668,13 +2669,15 @@ class KernelOrder:
             if index not in places:
                 join = path[length - 1][2]
                 before = tuple(dict.fromkeys(j[0] for j in joins[:k]))
+                after = tuple(j for j in dict.fromkeys(j[0] for j in joins[k + 1:])
+                              if j != index and j not in before)
                 cond = conditions[index]
                 mask = ((2 if type(cond.attr_test) is Const else 0)  # type: ignore[union-attr]
                         | (4 if type(cond.value_test) is Const else 0))  # type: ignore[union-attr]
                 twins = tuple(j for j, _, _ in joins if j != index
                               and _same_alpha(cond, conditions[j]))  # type: ignore[arg-type]
                 places[index] = (mask, before, join.born, (join.serial, *below[length:]),
-                                 twins, position, pnode.born)
+                                 twins, position, pnode.born, after)
         self._places[production.name] = places  # shared with the caller: see restart
         return places
 
@@ -2686,8 +2689,8 @@ class KernelOrder:
             node.born = 0
             stack.extend(node.children.values())
         for places in self._places.values():
-            for index, (mask, before, _, key, twins, position, _) in list(places.items()):
-                places[index] = (mask, before, 0, key, twins, position, 0)
+            for index, (mask, before, _, key, twins, position, _, after) in list(places.items()):
+                places[index] = (mask, before, 0, key, twins, position, 0, after)
 
     def remove(self, name: str) -> None:
         self._places.pop(name, None)
