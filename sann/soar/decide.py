@@ -120,7 +120,8 @@ def _acceptable_candidates(slot: Slot) -> list[Symbol]:
 
 
 def _better_worse(slot: Slot, candidates: list[Symbol]) -> tuple[list[Symbol], list[Symbol]]:
-    """Remove dominated and conflicted candidates; return (conflicted, remaining).
+    """Remove dominated and conflicted candidates; return (the conflict impasse's items,
+    remaining): no items while a candidate remains.
 
     As in the 9.6 kernel, a conflict impasse arises only when no candidate is left that is
     neither dominated nor in conflict: ``a > b, b > a`` with a third candidate ``c`` selects
@@ -151,8 +152,9 @@ def _better_worse(slot: Slot, candidates: list[Symbol]) -> tuple[list[Symbol], l
     remaining = [c for c in candidates if flags[_key(c)] == "candidate"]
     if remaining:
         return [], remaining
-    conflicted = [c for c in candidates if flags[_key(c)] == "conflicted"]
-    return conflicted or list(candidates), candidates
+    # The conflict impasse's items are all the candidates, dominated ones too (measured in
+    # soar_sml: a > b, b > a, a > c makes items a, b and c).
+    return list(candidates), candidates
 
 
 def _best_worst(slot: Slot, candidates: list[Symbol]) -> list[Symbol]:

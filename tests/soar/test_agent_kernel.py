@@ -369,3 +369,31 @@ def test_init_soar_traces_and_answers_like_the_kernel(level) -> None:
     agent.load("init-soar")
     assert out.getvalue() == theirs
     assert agent.print("s1") == theirs_print
+
+
+CONFLICTS = {
+    "worse-chain": "(<s> ^operator <b> < <a>) (<s> ^operator <c> < <a>) (<s> ^operator <a> < <b>)",
+    "better-and-dominated": (
+        "(<s> ^operator <a> > <b>) (<s> ^operator <b> > <a>) (<s> ^operator <a> > <c>)"
+    ),
+    "mixed": "(<s> ^operator <a> > <c>) (<s> ^operator <c> > <a>) (<s> ^operator <b> < <a>)",
+}
+
+
+@pytest.mark.parametrize("name", sorted(CONFLICTS))
+def test_conflict_items_are_every_candidate(name: str, tmp_path) -> None:
+    """When no candidate is left neither dominated nor in conflict, the conflict impasse
+    lists every candidate as an item, the dominated ones too, in the kernel's order."""
+    text = (
+        "sp {p (state <s> ^superstate nil) --> (<s> ^operator <a> + ^operator <b> +"
+        " ^operator <c> +) (<a> ^name a) (<b> ^name b) (<c> ^name c)}\n"
+        "sp {pr (state <s> ^operator <a> + ^operator <b> + ^operator <c> +) (<a> ^name a)"
+        f" (<b> ^name b) (<c> ^name c) --> {CONFLICTS[name]}}}\n"
+        "sp {show (state <s> ^impasse <i> ^item <x>) (<x> ^name <n>)"
+        " --> (write <i> | | <n> (crlf))}\n"
+    )
+    theirs, their_trace = kernel_run(text, 3, tmp_path)
+    ours, our_trace = our_run(text, 3)
+    assert ours == theirs
+    assert our_trace == their_trace
+    assert sum(f"conflict {n}" in our_trace for n in "abc") == 3
