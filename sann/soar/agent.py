@@ -648,8 +648,18 @@ class Agent:
             for goal in goals:
                 if goal.alive:
                     if self.trace_level >= 2:
-                        self._emit(f"\nRemoving state {goal.id} because element in GDS changed.")
+                        self._trace_gds_removal(goal, wme)
                     self._remove_goal(goal)
+
+    def _trace_gds_removal(self, goal: Goal, wme: WME) -> None:
+        """The kernel's watch-2 text for a goal-dependency-set violation (measured in
+        soar_sml; one text wherever the WME goes): on a fresh line, two messages naming
+        the WME, each line ended."""
+        where = trace_wme(wme)
+        self._emit_line(
+            f"Removing state {goal.id} because element in GDS changed. WME: {where}\n"
+            f"\n    REMOVING GOAL [{goal.id}] due to change in GDS WME {where}\n"
+        )
 
     def _add_arch(self, ident: Identifier, attr: Symbol, value: Symbol) -> WME:
         wme = self._add_wme(ident, attr, value)
@@ -1522,12 +1532,8 @@ class Agent:
             goals = self._gds_index.pop(wme, None)
             for goal in goals or ():
                 if goal.alive:
-                    if self.trace_level >= 2:  # measured
-                        self._emit_line(
-                            f"Removing state {goal.id} because element in GDS changed."
-                            f" WME: {trace_wme(wme)}\n\n    REMOVING GOAL [{goal.id}] due to"
-                            f" change in GDS WME {trace_wme(wme)}\n"
-                        )
+                    if self.trace_level >= 2:
+                        self._trace_gds_removal(goal, wme)
                     self._remove_goal(goal)
                     removed = True
         return removed

@@ -1,0 +1,108 @@
+"""Watch-2 (phases) traces, compared live with the Soar 9.6 kernel (soar_sml), whole text.
+
+Rules measured in the kernel:
+
+- '        REMOVING: Operator from context slot (proposal no longer matches): (...)' ends
+  its line: the next phase header leaves a blank line after it, a '\\t--- Firing ...'
+  line follows it directly, and so does 'Removing state S2 because of an operator
+  removal.' (which ends its line too).
+- After the elaboration cycle a halt happened in, the phase ends (its END line printed)
+  only if it is quiescent; with more to fire or retract the run stops without it.
+- An inconsistent decision: after 'Removing substates of ...', 'REMOVING CONTEXT SLOT:
+  Slot Identifier [S1] and attribute [operator]' when a substate goes (not for a lone
+  selected operator), then 'Decision for goal [S1] is inconsistent.  Replacing it
+  with....', each after a blank line.
+- A goal-dependency-set violation: on a fresh line 'Removing state S2 because element in
+  GDS changed. WME: (...)', a blank line, '    REMOVING GOAL [S2] due to change in GDS
+  WME (...)', each line ended.
+"""
+
+from __future__ import annotations
+
+import pytest
+from test_kernel_details import kernel, ours, same, theirs  # noqa: F401  (the fixture)
+
+AGENTS = "tests/soar/differential/agents"
+
+PROPOSE = "sp {p (state <s> ^superstate nil -^done) --> (<s> ^operator <o> +) (<o> ^name go)}"
+APPLY = "sp {a (state <s> ^operator.name go) --> (<s> ^done yes)}"
+HAND_WRITTEN = {
+    # The proposal retracts: REMOVING, then another cycle for the retraction.
+    "removing-then-cycle": [PROPOSE, APPLY],
+    # The same, with an elaboration of the result in that cycle.
+    "removing-elaborated": [PROPOSE, APPLY, "sp {e (state <s> ^done yes) --> (<s> ^more 1)}"],
+    # A halt in the cycle of the REMOVING: retractions are still to do, no END line.
+    "halt-not-quiescent": [PROPOSE, APPLY, "sp {h (state <s> ^done yes) --> (halt)}"],
+    # A halt with the operator's application still pending: no END line.
+    "halt-before-application": [
+        PROPOSE, APPLY, "sp {h (state <s> ^operator.name go) --> (halt)}"
+    ],
+    # A halt at quiescence: the END line.
+    "halt-quiescent": [
+        "sp {p (state <s> ^superstate nil) --> (<s> ^operator <o> +) (<o> ^name go)}",
+        "sp {h (state <s> ^operator.name go) --> (halt)}",
+    ],
+    # An operator no-change substate whose operator is retracted by a result.
+    "operator-removal-removes-substate": [
+        PROPOSE,
+        "sp {s (state <s> ^superstate <ss>) (<ss> ^operator.name go) --> (<ss> ^done yes)}",
+    ],
+    # A tie impasse made inconsistent by a new better preference: a substate goes.
+    "inconsistent-impasse": [
+        "sp {pa (state <s> ^superstate nil -^done) --> (<s> ^operator <o> +) (<o> ^name a)}",
+        "sp {pb (state <s> ^superstate nil -^done) --> (<s> ^operator <o> +) (<o> ^name b)}",
+        "sp {mark (state <s> ^superstate <ss>) (<ss> -^pick) --> (<ss> ^pick a)}",
+        "sp {best (state <s> ^pick a ^operator <o> +) (<o> ^name a) --> (<s> ^operator <o> >)}",
+        "sp {app (state <s> ^operator.name a) --> (<s> ^done yes)}",
+    ],
+    # A selected operator made inconsistent by a reject: no substate, no CONTEXT SLOT.
+    "inconsistent-operator": [
+        "sp {p (state <s> ^superstate nil -^done) --> (<s> ^operator <o> +) (<o> ^name a)}",
+        "sp {app (state <s> ^operator <o>) (<o> ^name a) --> (<s> ^mark 1)}",
+        "sp {rej (state <s> ^mark 1 ^operator <o> +) --> (<s> ^operator <o> -)}",
+    ],
+    # A substate's o-supported WME tests a top-state WME that a result then removes.
+    "gds-violation": [
+        "sp {p (state <s> ^superstate nil -^stop) --> (<s> ^operator <o> +) (<o> ^name go)}",
+        "sp {c (state <s> ^superstate nil -^flag) --> (<s> ^count 0)}",
+        "sp {sprop (state <s> ^superstate.operator.name go -^seen) -->"
+        " (<s> ^operator <o> +) (<o> ^name look)}",
+        "sp {sa (state <s> ^operator.name look ^superstate <ss>) (<ss> ^count 0) -->"
+        " (<s> ^seen yes)}",
+        "sp {sq (state <s> ^seen yes ^superstate <ss>) --> (<s> ^operator <o> +)"
+        " (<o> ^name set)}",
+        "sp {sb (state <s> ^operator.name set ^superstate <ss>) --> (<ss> ^flag 1)}",
+    ],
+}
+
+
+# Known differences, still to fix (found while measuring the rules above).
+KNOWN = {
+    "inconsistent-impasse": "the kernel warns of a justification with no conditions",
+    "inconsistent-operator": "the kernel keeps a state no-change made while the slot held a"
+    " rejected proposal; one made before a lone preference arrives goes",
+}
+
+
+@pytest.mark.parametrize("case", [
+    pytest.param(case, marks=pytest.mark.xfail(reason=KNOWN[case], strict=True))
+    if case in KNOWN else case
+    for case in HAND_WRITTEN
+])
+def test_watch2_trace_of_small_agents_agrees_with_the_kernel(kernel, case: str) -> None:  # noqa: F811
+    same(kernel, HAND_WRITTEN[case], ["watch 2", "run 6"])
+
+
+DIFFERENTIAL = [
+    "agent-commands", "conflict-impasse", "gds-removal-keeps-decided-wmes",
+    "halt-in-substate", "halt-mid-retraction", "impasse-resolution", "operator-rejected-pe-wave",
+    "pref-reject-acceptable", "result-retracts-justification", "state-no-change",
+    "tie-items-change", "write-output",
+]
+
+
+@pytest.mark.parametrize("name", DIFFERENTIAL)
+def test_watch2_trace_of_differential_agents_agrees_with_the_kernel(kernel, name: str) -> None:  # noqa: F811
+    path = f"{AGENTS}/{name}.soar"
+    expected = theirs(kernel, [f"source {{{path}}}"], ["watch 2", "run 60"])[1]
+    assert ours([f"source {path}"], ["watch 2", "run 60"])[1] == expected
