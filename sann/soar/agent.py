@@ -875,9 +875,10 @@ class Agent:
         Elaboration Phase' header only then)."""
         level_goal: Goal | None = goal
         while level_goal is not None:
-            if level_goal.retractions or (
-                level_goal.pending_i if firing == "IE" else level_goal.pending_o
-            ):
+            if level_goal.retractions:
+                return True
+            queue = level_goal.pending_i if firing == "IE" else level_goal.pending_o
+            if any(type(match) is not _JustificationMatch for match in queue):
                 return True
             level_goal = level_goal.sub
         return False

@@ -12,6 +12,10 @@ Rules measured in the kernel:
   Slot Identifier [S1] and attribute [operator]' when a substate goes (not for a lone
   selected operator), then 'Decision for goal [S1] is inconsistent.  Replacing it
   with....', each after a blank line.
+- The mixed-support warning ('WARNING:  Operator elaborations mixed with operator
+  applications') comes before the decision line of the operator that causes it.
+- A cycle made only for the retractions of a removed goal's rules is traced like any
+  other ('Firing Productions (IE) For State At Depth 1'), at the previous cycle's goal.
 - A goal-dependency-set violation: on a fresh line 'Removing state S2 because element in
   GDS changed. WME: (...)', a blank line, '    REMOVING GOAL [S2] due to change in GDS
   WME (...)', each line ended.
@@ -97,7 +101,8 @@ DIFFERENTIAL = [
     "agent-commands", "conflict-impasse", "gds-removal-keeps-decided-wmes",
     "halt-in-substate", "halt-mid-retraction", "impasse-resolution", "operator-rejected-pe-wave",
     "pref-reject-acceptable", "result-retracts-justification", "state-no-change",
-    "tie-items-change", "write-output",
+    "tie-items-change", "write-output", "result-structure", "result-two-levels-up",
+    "operator-no-change", "mixed-elaboration-application",
 ]
 
 
@@ -106,3 +111,15 @@ def test_watch2_trace_of_differential_agents_agrees_with_the_kernel(kernel, name
     path = f"{AGENTS}/{name}.soar"
     expected = theirs(kernel, [f"source {{{path}}}"], ["watch 2", "run 60"])[1]
     assert ours([f"source {path}"], ["watch 2", "run 60"])[1] == expected
+
+
+@pytest.mark.parametrize("watch", [1, 2])
+def test_the_mixed_support_warning_comes_before_the_decision_line(kernel, watch: int) -> None:  # noqa: F811
+    """The kernel's Rete warns as the operator's WME enters it, before the decision line."""
+    rules = [
+        "sp {p (state <s> ^superstate nil -^count) --> (<s> ^operator <o> +) (<o> ^name go)}",
+        "sp {a (state <s> ^operator <o>) (<o> ^name go) --> (<o> ^mark yes) (<s> ^touched yes)}",
+        "sp {c (state <s> ^operator <o>) (<o> ^name go ^mark yes) --> (<s> ^count 1)}",
+    ]
+    printed = same(kernel, rules, [f"watch {watch}", "run 2"])
+    assert "WARNING:  Operator elaborations mixed with operator applications\n" in printed[1]
