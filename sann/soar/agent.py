@@ -2092,6 +2092,8 @@ class Agent:
             f"justify{2 * self._justifications - 1}", None, home, (), bool(operators), True
         )
         just.grounds = grounds
+        if operators and _proposes_on_a_state(results):
+            operators = []  # a proposal is i-supported, as a rule's (see is_o_supported)
         on_operator = [any(pref.id is op for op in operators) for pref in results]
         mixed = bool(operators) and any(on_operator) and not all(on_operator)
         if mixed:
@@ -2321,6 +2323,17 @@ class Agent:
 
     def __repr__(self) -> str:
         return f"<Agent {self.name}: {len(self._productions)} productions, {len(self._wm)} wmes>"
+
+
+def _proposes_on_a_state(prefs: list[Preference]) -> bool:
+    """Whether the preferences propose an operator on a state: the kernel gives a
+    justification that does i-support, as it does a rule's match (measured in soar_sml:
+    a substate rule testing its selected operator that proposes an operator on the
+    superstate makes '+ (S1 ^operator O3 +) (justify1)', without ':O')."""
+    return any(
+        pref.type == ACCEPTABLE and pref.attr == "operator" and pref.id.level is not None
+        for pref in prefs
+    )
 
 
 class _JustificationMatch:

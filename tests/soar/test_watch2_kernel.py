@@ -15,7 +15,11 @@ Rules measured in the kernel:
 - The mixed-support warning ('WARNING:  Operator elaborations mixed with operator
   applications') comes before the decision line of the operator that causes it.
 - A cycle made only for the retractions of a removed goal's rules is traced like any
-  other ('Firing Productions (IE) For State At Depth 1'), at the previous cycle's goal.
+  other ('Firing Productions (IE) For State At Depth 1'), at the goal the last cycle went
+  down to; a pending justification match alone does not take the cycle down.
+- A match that proposes an operator on a state (an acceptable preference for ^operator)
+  fires as an i-assertion even when it tests the selected operator; so is a
+  justification of such a proposal made on the superstate i-supported.
 - A goal-dependency-set violation: on a fresh line 'Removing state S2 because element in
   GDS changed. WME: (...)', a blank line, '    REMOVING GOAL [S2] due to change in GDS
   WME (...)', each line ended.
@@ -50,6 +54,27 @@ HAND_WRITTEN = {
     "operator-removal-removes-substate": [
         PROPOSE,
         "sp {s (state <s> ^superstate <ss>) (<ss> ^operator.name go) --> (<ss> ^done yes)}",
+    ],
+    # A rule testing the selected operator that proposes another on its state: IE.
+    "proposal-testing-the-operator": [
+        PROPOSE,
+        "sp {a (state <s> ^operator.name go) --> (<s> ^operator <o> +) (<o> ^name next)"
+        " (<s> ^done yes)}",
+    ],
+    # A substate rule testing its operator that proposes one on the superstate: its
+    # justification is i-supported too, and goes when the superstate's operator does.
+    "proposal-result-on-the-superstate": [
+        PROPOSE,
+        "sp {s2p (state <s> ^superstate.operator.name go) --> (<s> ^operator <o> +)"
+        " (<o> ^name inner)}",
+        "sp {s2a (state <s> ^operator.name inner ^superstate <ss>) -->"
+        " (<ss> ^operator <o> + >) (<o> ^name next) (<ss> ^mark 1)}",
+    ],
+    # The same proposal on an identifier that is not a state: PE.
+    "proposal-on-a-non-state": [
+        PROPOSE,
+        "sp {a (state <s> ^operator.name go) --> (<s> ^foo <f> ^done yes) (<f> ^operator <o> +)"
+        " (<o> ^name next)}",
     ],
     # A tie impasse made inconsistent by a new better preference: a substate goes.
     "inconsistent-impasse": [
@@ -102,7 +127,7 @@ DIFFERENTIAL = [
     "halt-in-substate", "halt-mid-retraction", "impasse-resolution", "operator-rejected-pe-wave",
     "pref-reject-acceptable", "result-retracts-justification", "state-no-change",
     "tie-items-change", "write-output", "result-structure", "result-two-levels-up",
-    "operator-no-change", "mixed-elaboration-application",
+    "operator-no-change", "mixed-elaboration-application", "result-operator-proposal",
 ]
 
 
