@@ -20,6 +20,8 @@ Rules measured in the kernel:
 - A match that proposes an operator on a state (an acceptable preference for ^operator)
   fires as an i-assertion even when it tests the selected operator; so is a
   justification of such a proposal made on the superstate i-supported.
+- A retraction removes an instantiation's preferences in the order they were asserted:
+  of several goal-dependency WMEs that go, the one named is the first so removed.
 - A goal-dependency-set violation: on a fresh line 'Removing state S2 because element in
   GDS changed. WME: (...)', a blank line, '    REMOVING GOAL [S2] due to change in GDS
   WME (...)', each line ended.
@@ -128,6 +130,7 @@ DIFFERENTIAL = [
     "pref-reject-acceptable", "result-retracts-justification", "state-no-change",
     "tie-items-change", "write-output", "result-structure", "result-two-levels-up",
     "operator-no-change", "mixed-elaboration-application", "result-operator-proposal",
+    "lookahead-selection", "recursive-lookahead",
 ]
 
 
