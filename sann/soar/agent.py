@@ -1326,6 +1326,7 @@ class Agent:
         pref.live = True
         if slot.is_context:
             self._context_changed_at(ident)
+            slot.touched = True
             if not slot.changed:
                 slot.changed = True
                 self._changed_context.append(slot)
@@ -1354,6 +1355,7 @@ class Agent:
         pref.inst = None  # type: ignore[assignment]
         if slot.is_context:
             self._context_changed_at(slot.id)
+            slot.touched = True
         if not slot.changed:
             slot.changed = True
             (self._changed_context if slot.is_context else self._changed).append(slot)
@@ -1748,6 +1750,7 @@ class Agent:
 
     def _decide_slot(self, goal: Goal, decidable: bool) -> bool:
         slot = goal.op_slot
+        slot.touched = False
         if not decidable:
             impasse, candidates = dec.NO_CHANGE, []
         else:
@@ -1987,9 +1990,11 @@ class Agent:
         if sub is not None and sub.impasse != dec.NO_CHANGE:
             return impasse == sub.impasse
         if sub is not None:
-            # A state no-change stands only while the slot has no preference at all
-            # (measured: a lone prohibited proposal already makes it inconsistent).
-            return not slot.prefs
+            # A state no-change stands while no preference came or went since the slot was
+            # decided (measured in soar_sml: one made while the slot held a rejected
+            # proposal stays; any later preference, even a lone reject, prohibit or better,
+            # or a second reject of the same operator, takes it away).
+            return not slot.touched
         return impasse == dec.NONE and not candidates
 
     def _remove_current_decision(self, goal: Goal) -> None:
