@@ -2079,11 +2079,14 @@ class Agent:
         """Stand in for the substate's reasoning with a justification whose conditions are
         the superstate WMEs the results depend on; its support is computed like a rule's:
         o-support when those WMEs include the selected operator of its goal."""
-        self._justifications += 1
         visited: list[Instantiation] = []
         grounds = tuple(
             self._backtrace(inst, inst.goal.level, through_o_support=True, visited=visited)
         )
+        if not grounds:
+            self._ignore_unconditional_justification(inst)
+            return
+        self._justifications += 1
         match_goal_id = self._goal_of_grounds(grounds).id
         operators = [
             w.value
@@ -2119,6 +2122,20 @@ class Agent:
         self._watch_negations(just, visited, inst.goal.level)
         if home.level > 1:
             home.insts[just] = None
+
+    def _ignore_unconditional_justification(self, inst: Instantiation) -> None:
+        """Results that test nothing in the superstate get no justification: the kernel
+        warns at watch 2 and up and the results keep only the substate rule's support, so
+        they go with the substate (measured in soar_sml: a result made from a negated
+        superstate test leaves when its substate does)."""
+        if self.trace_level >= 2:
+            self._emit(
+                "\nWarning: Soar has created a chunk or justification with no conditions."
+                "  Ignoring.\n\n         Any results created will lose support when the"
+                " sub-state disappears.\n         To avoid this issue, the problem-solving"
+                " in the sub-state must\n         positively test at least one item in the"
+                f" super-state.\n\nRule firing that led to invalid chunk: {inst.name}\n"
+            )
 
     def _replace_duplicate_justification(self, just: Instantiation) -> None:
         """A justification identical to a live one (same conditions, same results)
