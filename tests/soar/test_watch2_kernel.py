@@ -51,9 +51,7 @@ HAND_WRITTEN = {
     # A halt in the cycle of the REMOVING: retractions are still to do, no END line.
     "halt-not-quiescent": [PROPOSE, APPLY, "sp {h (state <s> ^done yes) --> (halt)}"],
     # A halt with the operator's application still pending: no END line.
-    "halt-before-application": [
-        PROPOSE, APPLY, "sp {h (state <s> ^operator.name go) --> (halt)}"
-    ],
+    "halt-before-application": [PROPOSE, APPLY, "sp {h (state <s> ^operator.name go) --> (halt)}"],
     # A halt at quiescence: the END line.
     "halt-quiescent": [
         "sp {p (state <s> ^superstate nil) --> (<s> ^operator <o> +) (<o> ^name go)}",
@@ -107,34 +105,49 @@ HAND_WRITTEN = {
         " (<s> ^operator <o> +) (<o> ^name look)}",
         "sp {sa (state <s> ^operator.name look ^superstate <ss>) (<ss> ^count 0) -->"
         " (<s> ^seen yes)}",
-        "sp {sq (state <s> ^seen yes ^superstate <ss>) --> (<s> ^operator <o> +)"
-        " (<o> ^name set)}",
+        "sp {sq (state <s> ^seen yes ^superstate <ss>) --> (<s> ^operator <o> +) (<o> ^name set)}",
         "sp {sb (state <s> ^operator.name set ^superstate <ss>) --> (<ss> ^flag 1)}",
     ],
 }
 
 
 # Known differences, still to fix (found while measuring the rules above).
-KNOWN = {
-}
+KNOWN = {}
 
 
-@pytest.mark.parametrize("case", [
-    pytest.param(case, marks=pytest.mark.xfail(reason=KNOWN[case], strict=True))
-    if case in KNOWN else case
-    for case in HAND_WRITTEN
-])
+@pytest.mark.parametrize(
+    "case",
+    [
+        pytest.param(case, marks=pytest.mark.xfail(reason=KNOWN[case], strict=True))
+        if case in KNOWN
+        else case
+        for case in HAND_WRITTEN
+    ],
+)
 def test_watch2_trace_of_small_agents_agrees_with_the_kernel(kernel, case: str) -> None:  # noqa: F811
     same(kernel, HAND_WRITTEN[case], ["watch 2", "run 6"])
 
 
 DIFFERENTIAL = [
-    "agent-commands", "conflict-impasse", "gds-removal-keeps-decided-wmes",
-    "halt-in-substate", "halt-mid-retraction", "impasse-resolution", "operator-rejected-pe-wave",
-    "pref-reject-acceptable", "result-retracts-justification", "state-no-change",
-    "tie-items-change", "write-output", "result-structure", "result-two-levels-up",
-    "operator-no-change", "mixed-elaboration-application", "result-operator-proposal",
-    "lookahead-selection", "recursive-lookahead",
+    "agent-commands",
+    "conflict-impasse",
+    "gds-removal-keeps-decided-wmes",
+    "halt-in-substate",
+    "halt-mid-retraction",
+    "impasse-resolution",
+    "operator-rejected-pe-wave",
+    "pref-reject-acceptable",
+    "result-retracts-justification",
+    "state-no-change",
+    "tie-items-change",
+    "write-output",
+    "result-structure",
+    "result-two-levels-up",
+    "operator-no-change",
+    "mixed-elaboration-application",
+    "result-operator-proposal",
+    "lookahead-selection",
+    "recursive-lookahead",
 ]
 
 
@@ -165,24 +178,29 @@ REJECTED = [
 RESULT_GO = "sp {m (state <s> ^superstate <ss>) (<ss> ^superstate nil) --> (<ss> ^go 1)}"
 STATE_NO_CHANGE = {
     # made while the slot held a rejected (prohibited) proposal: it stays
-    "rejected-before": REJECTED + [
-        "sp {rej (state <s> ^mark 1 ^operator <o> +) --> (<s> ^operator <o> -)}"],
-    "prohibited-before": REJECTED + [
-        "sp {rej (state <s> ^mark 1 ^operator <o> +) --> (<s> ^operator <o> ~)}"],
+    "rejected-before": REJECTED
+    + ["sp {rej (state <s> ^mark 1 ^operator <o> +) --> (<s> ^operator <o> -)}"],
+    "prohibited-before": REJECTED
+    + ["sp {rej (state <s> ^mark 1 ^operator <o> +) --> (<s> ^operator <o> ~)}"],
     # a second reject of the same operator after it: it goes
-    "second-reject-after": REJECTED + [
-        "sp {rej (state <s> ^mark 1 ^operator <o> +) --> (<s> ^operator <o> -)}", RESULT_GO,
-        "sp {rej2 (state <s> ^go 1 ^operator <o> +) --> (<s> ^operator <o> -)}"],
+    "second-reject-after": REJECTED
+    + [
+        "sp {rej (state <s> ^mark 1 ^operator <o> +) --> (<s> ^operator <o> -)}",
+        RESULT_GO,
+        "sp {rej2 (state <s> ^go 1 ^operator <o> +) --> (<s> ^operator <o> -)}",
+    ],
     # a change elsewhere on the state: it stays
-    "other-attribute-after": REJECTED + [
-        "sp {rej (state <s> ^mark 1 ^operator <o> +) --> (<s> ^operator <o> -)}", RESULT_GO],
+    "other-attribute-after": REJECTED
+    + ["sp {rej (state <s> ^mark 1 ^operator <o> +) --> (<s> ^operator <o> -)}", RESULT_GO],
     # a lone preference (no acceptable one) after it: it goes
     "lone-prohibit-after": [
-        RESULT_GO, "sp {p (state <s> ^superstate nil ^go 1) --> (<s> ^operator <o> ~)"
-        " (<o> ^name x)}"],
+        RESULT_GO,
+        "sp {p (state <s> ^superstate nil ^go 1) --> (<s> ^operator <o> ~) (<o> ^name x)}",
+    ],
     "lone-better-after": [
-        RESULT_GO, "sp {p (state <s> ^superstate nil ^go 1) --> (<s> ^operator <o> >)"
-        " (<o> ^name x)}"],
+        RESULT_GO,
+        "sp {p (state <s> ^superstate nil ^go 1) --> (<s> ^operator <o> >) (<o> ^name x)}",
+    ],
 }
 
 
@@ -208,6 +226,8 @@ UNCONDITIONAL = {
 @pytest.mark.parametrize("watch", [1, 2])
 @pytest.mark.parametrize("case", list(UNCONDITIONAL))
 def test_a_justification_without_conditions_is_ignored_as_in_the_kernel(
-    kernel, case: str, watch: int  # noqa: F811
+    kernel,  # noqa: F811
+    case: str,
+    watch: int,
 ) -> None:
     same(kernel, UNCONDITIONAL[case], [f"watch {watch}", "run 3", "print --depth 2 s1"])
