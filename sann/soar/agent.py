@@ -651,8 +651,18 @@ class Agent:
             for goal in goals:
                 if goal.alive:
                     if self.trace_level >= 2:
-                        self._emit(f"\nRemoving state {goal.id} because element in GDS changed.")
+                        self._trace_gds_removal(goal, wme)
                     self._remove_goal(goal)
+
+    def _trace_gds_removal(self, goal: Goal, wme: WME) -> None:
+        """The kernel's watch-2 text for a goal-dependency-set violation (measured in
+        soar_sml; one text wherever the WME goes): on a fresh line, two messages naming
+        the WME, each line ended."""
+        where = trace_wme(wme)
+        self._emit_line(
+            f"Removing state {goal.id} because element in GDS changed. WME: {where}\n"
+            f"\n    REMOVING GOAL [{goal.id}] due to change in GDS WME {where}\n"
+        )
 
     def _add_arch(self, ident: Identifier, attr: Symbol, value: Symbol) -> WME:
         wme = self._add_wme(ident, attr, value)
@@ -868,9 +878,10 @@ class Agent:
         Elaboration Phase' header only then)."""
         level_goal: Goal | None = goal
         while level_goal is not None:
-            if level_goal.retractions or (
-                level_goal.pending_i if firing == "IE" else level_goal.pending_o
-            ):
+            if level_goal.retractions:
+                return True
+            queue = level_goal.pending_i if firing == "IE" else level_goal.pending_o
+            if any(type(match) is not _JustificationMatch for match in queue):
                 return True
             level_goal = level_goal.sub
         return False
@@ -1326,6 +1337,7 @@ class Agent:
         pref.live = True
         if slot.is_context:
             self._context_changed_at(ident)
+            slot.touched = True
             if not slot.changed:
                 slot.changed = True
                 self._changed_context.append(slot)
@@ -1354,6 +1366,7 @@ class Agent:
         pref.inst = None  # type: ignore[assignment]
         if slot.is_context:
             self._context_changed_at(slot.id)
+            slot.touched = True
         if not slot.changed:
             slot.changed = True
             (self._changed_context if slot.is_context else self._changed).append(slot)
@@ -1533,12 +1546,8 @@ class Agent:
             goals = self._gds_index.pop(wme, None)
             for goal in goals or ():
                 if goal.alive:
-                    if self.trace_level >= 2:  # measured
-                        self._emit_line(
-                            f"Removing state {goal.id} because element in GDS changed."
-                            f" WME: {trace_wme(wme)}\n\n    REMOVING GOAL [{goal.id}] due to"
-                            f" change in GDS WME {trace_wme(wme)}\n"
-                        )
+                    if self.trace_level >= 2:
+                        self._trace_gds_removal(goal, wme)
                     self._remove_goal(goal)
                     removed = True
         return removed
@@ -1752,6 +1761,7 @@ class Agent:
 
     def _decide_slot(self, goal: Goal, decidable: bool) -> bool:
         slot = goal.op_slot
+        slot.touched = False
         if not decidable:
             impasse, candidates = dec.NO_CHANGE, []
         else:
@@ -1991,9 +2001,11 @@ class Agent:
         if sub is not None and sub.impasse != dec.NO_CHANGE:
             return impasse == sub.impasse
         if sub is not None:
-            # A state no-change stands only while the slot has no preference at all
-            # (measured: a lone prohibited proposal already makes it inconsistent).
-            return not slot.prefs
+            # A state no-change stands while no preference came or went since the slot was
+            # decided (measured in soar_sml: one made while the slot held a rejected
+            # proposal stays; any later preference, even a lone reject, prohibit or better,
+            # or a second reject of the same operator, takes it away).
+            return not slot.touched
         return impasse == dec.NONE and not candidates
 
     def _remove_current_decision(self, goal: Goal) -> None:
@@ -2078,11 +2090,14 @@ class Agent:
         """Stand in for the substate's reasoning with a justification whose conditions are
         the superstate WMEs the results depend on; its support is computed like a rule's:
         o-support when those WMEs include the selected operator of its goal."""
-        self._justifications += 1
         visited: list[Instantiation] = []
         grounds = tuple(
             self._backtrace(inst, inst.goal.level, through_o_support=True, visited=visited)
         )
+        if not grounds:
+            self._ignore_unconditional_justification(inst)
+            return
+        self._justifications += 1
         match_goal_id = self._goal_of_grounds(grounds).id
         operators = [
             w.value
@@ -2096,6 +2111,8 @@ class Agent:
             f"justify{2 * self._justifications - 1}", None, home, (), bool(operators), True
         )
         just.grounds = grounds
+        if operators and _proposes_on_a_state(results):
+            operators = []  # a proposal is i-supported, as a rule's (see is_o_supported)
         on_operator = [any(pref.id is op for op in operators) for pref in results]
         mixed = bool(operators) and any(on_operator) and not all(on_operator)
         if mixed:
@@ -2116,6 +2133,20 @@ class Agent:
         self._watch_negations(just, visited, inst.goal.level)
         if home.level > 1:
             home.insts[just] = None
+
+    def _ignore_unconditional_justification(self, inst: Instantiation) -> None:
+        """Results that test nothing in the superstate get no justification: the kernel
+        warns at watch 2 and up and the results keep only the substate rule's support, so
+        they go with the substate (measured in soar_sml: a result made from a negated
+        superstate test leaves when its substate does)."""
+        if self.trace_level >= 2:
+            self._emit(
+                "\nWarning: Soar has created a chunk or justification with no conditions."
+                "  Ignoring.\n\n         Any results created will lose support when the"
+                " sub-state disappears.\n         To avoid this issue, the problem-solving"
+                " in the sub-state must\n         positively test at least one item in the"
+                f" super-state.\n\nRule firing that led to invalid chunk: {inst.name}\n"
+            )
 
     def _replace_duplicate_justification(self, just: Instantiation) -> None:
         """A justification identical to a live one (same conditions, same results)
@@ -2361,6 +2392,17 @@ def _token_order(wmes: tuple, place: tuple, starts: list[int]) -> tuple:
     join below too. A token was made when its last WME entered."""
     token = min((_entry_rank(wmes[j], starts) for j in place[1]), default=(1, 0))
     return (token, *[_entry_rank(wmes[j], starts) for j in place[7]])
+
+
+def _proposes_on_a_state(prefs: list[Preference]) -> bool:
+    """Whether the preferences propose an operator on a state: the kernel gives a
+    justification that does i-support, as it does a rule's match (measured in soar_sml:
+    a substate rule testing its selected operator that proposes an operator on the
+    superstate makes '+ (S1 ^operator O3 +) (justify1)', without ':O')."""
+    return any(
+        pref.type == ACCEPTABLE and pref.attr == "operator" and pref.id.level is not None
+        for pref in prefs
+    )
 
 
 class _JustificationMatch:

@@ -56,6 +56,9 @@ class ProductionInfo:
     program: RhsProgram | None = None
     #: Firings since load (``firings`` restarts at init-soar).
     runs: int = 0
+    #: Variables on which the actions propose an operator (an acceptable preference for
+    #: ``^operator``): on a state, that makes the rule i-supported (see is_o_supported).
+    proposal_ids: tuple[str, ...] = ()
 
     @classmethod
     def of(cls, production: Production) -> ProductionInfo:
@@ -81,6 +84,15 @@ class ProductionInfo:
             | (4 if type(getattr(cond, "value_test", None)) is Const else 0)
             for cond in production.conditions
         )
+        proposals = tuple(
+            dict.fromkeys(
+                a.id.name
+                for a in production.actions
+                if isinstance(a, MakeAction) and isinstance(a.id, Var)
+                and isinstance(a.attr, Const) and a.attr.value == "operator"
+                and a.preference == "+"
+            )
+        )
         return cls(
             production,
             tuple(indexes),
@@ -88,6 +100,7 @@ class ProductionInfo:
             production.actions,
             make_ids,
             cond_masks=masks,
+            proposal_ids=proposals,
         )
 
 
@@ -441,6 +454,8 @@ def is_o_supported(
     if not make_ids:
         return False  # the kernel fires write/halt-only rules as i-assertions
     bindings = match.bindings if match is not None else {}  # type: ignore[attr-defined]
+    if info.proposal_ids and _proposes_on_a_state(info, bindings):
+        return False
     applies = elaborates = False
     for name in make_ids:
         value = bindings.get(name)
@@ -458,6 +473,19 @@ def is_o_supported(
     if applies and elaborates:
         return MIXED
     return applies
+
+
+def _proposes_on_a_state(info: ProductionInfo, bindings: dict) -> bool:
+    """Whether the match proposes an operator on a state. The kernel gives such a match
+    i-support even when it tests the selected operator (measured in soar_sml: a rule
+    testing ^operator.name go that proposes another operator on its own state or on
+    the superstate fires as IE, its preferences without :O; a proposal on a non-state
+    identifier, or a lone better preference, still fires as PE)."""
+    for name in info.proposal_ids:
+        ident = bindings.get(name)
+        if type(ident) is Identifier and ident.level is not None:
+            return True
+    return False
 
 
 def tested_operators(

@@ -104,6 +104,7 @@ class Slot:
         "wmes",
         "acceptable_wmes",
         "changed",
+        "touched",
     )
 
     def __init__(self, id: Identifier, attr: Symbol, is_context: bool) -> None:
@@ -116,6 +117,9 @@ class Slot:
         #: value -> ``(id ^operator value +)`` WME (operator slots only).
         self.acceptable_wmes: dict[Symbol, WME] = {}
         self.changed = False
+        #: A context slot: a preference came or went since the slot was last decided
+        #: (the kernel's per-slot changed flag; a state no-change stands while it is unset).
+        self.touched = False
 
     def of_type(self, ptype: str) -> list[Preference]:
         return self.prefs.get(ptype, _EMPTY)
