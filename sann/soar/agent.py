@@ -740,7 +740,11 @@ class Agent:
         while True:
             goal, firing = self._next_active(apply)
             if firing == "":
-                self._consistent_through(None)
+                # The kernel checks the stack at the end of an application phase only
+                # after an IE cycle (measured: a tie that a PE cycle's result resolved
+                # stands until the propose phase).
+                if not apply or self._active_type != "PE":
+                    self._consistent_through(None)
                 self._end_phase(apply, end)
                 return
             self._elaboration_cycle(goal, firing)

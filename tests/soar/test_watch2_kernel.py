@@ -29,6 +29,9 @@ Rules measured in the kernel:
   kernel warns ('Warning: Soar has created a chunk or justification with no conditions.
   Ignoring.' ... 'Rule firing that led to invalid chunk: mark'); they go with the
   substate.
+- At the end of an application phase the goal stack's decisions are checked only when
+  its last elaboration cycle was IE: a tie that a PE cycle's result resolved stands until
+  the propose phase.
 - A goal-dependency-set violation: on a fresh line 'Removing state S2 because element in
   GDS changed. WME: (...)', a blank line, '    REMOVING GOAL [S2] due to change in GDS
   WME (...)', each line ended.
@@ -108,6 +111,30 @@ HAND_WRITTEN = {
         "sp {sq (state <s> ^seen yes ^superstate <ss>) --> (<s> ^operator <o> +) (<o> ^name set)}",
         "sp {sb (state <s> ^operator.name set ^superstate <ss>) --> (<ss> ^flag 1)}",
     ],
+    # A tie resolved by a result: an o-supported one (the substate operator's application)
+    # leaves the tie until the next propose phase checks the stack; an i-supported one, or
+    # an IE cycle after the PE one, has it removed at the end of the application phase.
+    **{
+        f"tie-resolved-by-{kind}": [
+            "sp {init (state <s> ^superstate nil -^count) --> (<s> ^operator <o> + >)"
+            " (<o> ^name init)}",
+            "sp {init*a (state <s> ^operator.name init) --> (<s> ^count 0)}",
+            "sp {pa (state <s> ^superstate nil ^count 0) --> (<s> ^operator <o> +) (<o> ^name a)}",
+            "sp {pb (state <s> ^superstate nil ^count 0) --> (<s> ^operator <o> +) (<o> ^name b)}",
+            "sp {tie*p (state <s> ^impasse tie) --> (<s> ^operator <e> +) (<e> ^name eval)}",
+            f"sp {{tie*a (state <s> {test} ^superstate <ss> ^item <i>) (<i> ^name a)"
+            f" --> (<ss> ^operator <i> >) {extra}}}",
+            "sp {tie*e (state <s> ^evaluated <i>) --> (<s> ^seen <i>)}",
+            "sp {app (state <s> ^operator <o> ^count <c>) (<o> ^name <n>)"
+            " --> (<s> ^count (+ <c> 1) <c> -) (write <n> (crlf))}",
+            "sp {done (state <s> ^count 1) --> (halt)}",
+        ]
+        for kind, test, extra in [
+            ("o-result", "^operator.name eval", ""),
+            ("i-result", "^impasse tie", ""),
+            ("o-result-then-ie", "^operator.name eval", "(<s> ^evaluated <i>)"),
+        ]
+    },
 }
 
 
