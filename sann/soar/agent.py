@@ -1152,11 +1152,17 @@ class Agent:
                     other = places[j]
                     if other[0] > place[0] or (other[0] == place[0] and other[5] < place[5]):
                         place = other
-        linked = place[2]  # when its join was made, or relinked (see KernelOrder)
+        # When its join was made, or relinked (see KernelOrder): the entry of the newest WME
+        # before it, in the order the kernel's Rete took the WMEs in (_linked_rank).
+        born = place[2]
+        starts = self._batch_starts
+        linked = (bisect_left(starts, born), _LATEST)
         for j in place[1]:
             other_wme = wmes[j]
-            if other_wme is not None and other_wme.timetag > linked:
-                linked = other_wme.timetag
+            if other_wme is not None and other_wme.timetag > born:
+                rank = (bisect_left(starts, other_wme.timetag), -other_wme.timetag)
+                if rank > linked:
+                    linked = rank
         if not tokens:
             return (newest, place[0], linked, place[3])
         return (newest, place[0], linked, place[3],
@@ -2280,6 +2286,8 @@ class Agent:
             for wme in current.wmes:
                 if wme is None:
                     continue
+                if wme.attr in _ITEM_ATTRS:
+                    wme = self._item_proposal(wme)
                 if self._level_of(wme.id) < level:
                     grounds.setdefault(wme.timetag, wme)
                     continue
@@ -2295,6 +2303,19 @@ class Agent:
                     if visited is not None:
                         visited.append(source)
         return list(grounds.values())
+
+    def _item_proposal(self, wme: WME) -> WME:
+        """An impasse's ``^item`` or ``^non-numeric`` WME stands for the superstate's
+        acceptable-preference WME of that operator (measured in soar_sml: a result made
+        from ``(S2 ^item O2)`` alone is justified by ``(state S1 ^operator O2 +)``); any
+        other WME stands for itself."""
+        goal = self._goals.get(wme.id)
+        if goal is None or goal.superstate is None:
+            return wme
+        if goal.items.get((wme.attr, dec._key(wme.value))) is not wme:
+            return wme
+        proposal = goal.superstate.op_slot.acceptable_wmes.get(_vkey(wme.value))
+        return wme if proposal is None else proposal
 
     def _remember_source(self, wme: WME, slot: Slot, types: tuple[str, ...]) -> None:
         """Note which instantiation made a substate WME, for backtracing after that
@@ -2362,19 +2383,23 @@ class Agent:
         return f"<Agent {self.name}: {len(self._productions)} productions, {len(self._wm)} wmes>"
 
 
+_ITEM_ATTRS = frozenset(("item", "non-numeric"))
+_LATEST = float("inf")  # a join made between two batches: after every WME of the first
+
+
 def _same_join_linked(keys: list[tuple]) -> list[tuple]:
     """Keys ``(first, *_kernel_key[1:])`` with one relinking time for the matches made at
     the same join (same creating WME, alpha memory and path): the kernel relinks a join
     once, when its parent memory gets its first token, so these matches go in the order of
-    their tokens (``_token_order``), not of their own WMEs (all get the latest of them: the
-    first token of a batch enters first)."""
-    latest: dict[tuple, object] = {}
+    their tokens (``_token_order``), not of their own WMEs (all get the earliest: the first
+    token relinked the join)."""
+    first: dict[tuple, object] = {}
     for key in keys:
         if len(key) > 5:
             group = (key[0], key[1], key[2], key[4])
-            if group not in latest or latest[group] < key[3]:  # type: ignore[operator]
-                latest[group] = key[3]
-    return [(*key[:3], latest[(key[0], key[1], key[2], key[4])], *key[4:]) if len(key) > 5
+            if group not in first or key[3] < first[group]:  # type: ignore[operator]
+                first[group] = key[3]
+    return [(*key[:3], first[(key[0], key[1], key[2], key[4])], *key[4:]) if len(key) > 5
             else key for key in keys]
 
 

@@ -138,6 +138,20 @@ HAND_WRITTEN = {
 }
 
 
+# A result made from the impasse's ^item (or ^non-numeric) WME alone is justified by the
+# superstate's acceptable-preference WME of that operator, not ignored as unconditional.
+HAND_WRITTEN.update({
+    f"result-from-{attr}": [
+        "sp {pa (state <s> ^superstate nil -^done) --> (<s> ^operator <o> +) (<o> ^name a)}",
+        "sp {pb (state <s> ^superstate nil -^done) --> (<s> ^operator <o> +) (<o> ^name b)}",
+        f"sp {{tie (state <s> ^impasse tie ^superstate <ss> ^{attr} <i> -^{attr} {{<j> > <i>}})"
+        " --> (<ss> ^operator <i> >)}",
+        "sp {app (state <s> ^operator <o>) --> (<s> ^done yes)}",
+    ]
+    for attr in ("item", "non-numeric")
+})
+
+
 # Known differences, still to fix (found while measuring the rules above).
 KNOWN = {}
 
