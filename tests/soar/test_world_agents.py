@@ -1,0 +1,170 @@
+"""Random "world" agents compared with the real Soar 9.6 kernel (soar_sml), whole behaviour.
+
+Each agent makes a few objects with kinds, values and links, elaborates them (predicates,
+disjunctions, negations, conjunctive negations, math), proposes operators on them with
+random preferences (several instantiations of one rule tie), prefers some over others,
+and resolves its impasses in substates (ties and conflicts by result preferences, by an
+evaluation operator, state and operator no-change). Halting, the operator sequence, the
+written output, the counts of the ``stats`` command and the final working memory must be
+the kernel's. Found this way (each now a kernel rule in the engine): the order of the
+matches one WME makes at one join, the order of an alpha memory's joins relinked in one
+batch, the items of a conflict impasse, when the application phase checks the goal stack,
+and what an impasse's ``^item`` WME backtraces to.
+"""
+
+from __future__ import annotations
+
+import random
+
+import pytest
+from differential.kernel import run_kernel, run_ours
+
+pytest.importorskip("soar_sml")
+
+KINDS = ["a", "b", "c"]
+PREDICATES = ["<", ">", "<=", ">=", "<>"]
+
+
+def world_agent(seed: int) -> str:
+    """The rule file of one random world agent."""
+    r = random.Random(seed)
+    lines = [f"indifferent-selection --{r.choice(['first', 'last'])}"]
+    lines += _init(r)
+    lines += [_elaboration(r, k) for k in range(r.randint(1, 4))]
+    limit = r.randint(3, 7)
+    ops = [f"op{i}" for i in range(r.randint(2, 4))]
+    for op in ops:
+        lines += _operator(r, op, limit)
+    lines += [_preference(r, ops, k) for k in range(r.randint(0, 3))]
+    lines += _impasses(r)
+    lines.append(
+        f"sp {{done (state <s> ^superstate nil ^count >= {limit})"
+        " --> (write |done| (crlf)) (halt)}"
+    )
+    return "\n".join(lines) + "\n"
+
+
+def _init(r: random.Random) -> list[str]:
+    count = r.randint(2, 4)
+    things = " ".join(f"<t{i}>" for i in range(count))
+    body = " ".join(
+        f"(<t{i}> ^kind {r.choice(KINDS)} ^val {r.randint(0, 5)}"
+        + (f" ^link <t{i - 1}>" if i and r.random() < 0.5 else "")
+        + ")"
+        for i in range(count)
+    )
+    return [
+        "sp {init (state <s> ^superstate nil -^count) --> (<s> ^operator <o> + >)"
+        " (<o> ^name init)}",
+        f"sp {{init*a (state <s> ^operator.name init) --> (<s> ^count 0 ^thing {things}) {body}}}",
+    ]
+
+
+def _elaboration(r: random.Random, k: int) -> str:
+    head = f"sp {{elab{k} "
+    kind = r.randrange(6)
+    if kind == 0:
+        value = f"{{<v> {r.choice(PREDICATES)} {r.randint(0, 5)}}}"
+        return head + f"(state <s> ^thing <t>) (<t> ^val {value}) --> (<t> ^mark m{k})}}"
+    if kind == 1:
+        kinds = " ".join(r.sample(KINDS, 2))
+        return head + (
+            f"(state <s> ^superstate nil ^thing <t>) (<t> ^kind << {kinds} >>) -(<t> ^mark)"
+            " --> (<s> ^plain <t>)}"
+        )
+    if kind == 2:
+        return head + (
+            "(state <s> ^superstate nil ^thing <t>) (<t> ^val <v>)"
+            " -{(<s> ^thing <u>) (<u> ^val > <v>)} --> (<s> ^max <v>)}"
+        )
+    if kind == 3:
+        return head + "(state <s> ^thing <t>) (<t> ^link.val <v>) --> (<t> ^linkval (+ <v> 1))}"
+    if kind == 4:
+        return head + (
+            "(state <s> ^superstate nil ^count <c>) --> (<s> ^half (div <c> 2) ^ratio (/ <c> 4.0))}"
+        )
+    return head + (
+        "(state <s> ^thing <t> ^thing {<u> <> <t>}) (<t> ^kind <k> ^val <v>)"
+        " (<u> ^kind <k> ^val < <v>) --> (<s> ^pair <p>) (<p> ^hi <t> ^lo <u>)}"
+    )
+
+
+def _operator(r: random.Random, op: str, limit: int) -> list[str]:
+    pref = r.choice(["+", "+", "+ =", "+ >", "+ <", "+ = 0.3", "+ ~", "+ !", "+ -", "+ = <"])
+    kind = r.choice([*KINDS, "<k>"])
+    test = r.choice(["", f" ^val < {r.randint(2, 9)}", " -^mark", " ^mark"])
+    effect = r.choice([
+        "(<t> ^val <v> - (+ <v> 1))",
+        "(<t> ^val <v> - (- <v> 2))",
+        "(<s> ^thing <t> -)",
+        "(<s> ^thing <n>) (<n> ^kind c ^val <c>)",
+        "(<t> ^mark x)",
+        "",
+    ])
+    return [
+        f"sp {{p{op} (state <s> ^superstate nil ^count <c> < {limit} ^thing <t>)"
+        f" (<t> ^kind {kind}{test}) --> (<s> ^operator <o> {pref}) (<o> ^name {op} ^target <t>)}}",
+        f"sp {{a{op} (state <s> ^operator <o> ^count <c>) (<o> ^name {op} ^target <t>)"
+        f" (<t> ^val <v>) --> (<s> ^count <c> - (+ <c> 1)) {effect} (write |{op} | <v> (crlf))}}",
+    ]
+
+
+def _preference(r: random.Random, ops: list[str], k: int) -> str:
+    x, y = r.sample(ops, 2) if r.random() < 0.7 else (ops[0], ops[0])
+    relation = r.choice([">", "<", "="])
+    test = r.choice([">", "<", "<>", ">="])
+    return (
+        f"sp {{pr{k} (state <s> ^operator <x> + ^operator {{<y> <> <x>}} +)"
+        f" (<x> ^name {x} ^target.val <v>) (<y> ^name {y} ^target.val {test} <v>)"
+        f" --> (<s> ^operator <x> {relation} <y>)}}"
+    )
+
+
+def _impasses(r: random.Random) -> list[str]:
+    kind = r.randrange(4)
+    lines = []
+    if kind == 0:
+        lines.append(
+            "sp {tie (state <s> ^impasse << tie conflict >> ^superstate <ss> ^item <i>"
+            " -^item {<j> > <i>}) --> (<ss> ^operator <i> >)}"
+        )
+    elif kind == 1:
+        lines += [
+            "sp {tie*p (state <s> ^impasse << tie conflict >> ^item <i>) (<i> ^target.val <v>)"
+            " --> (<s> ^operator <e> +) (<e> ^name eval ^item <i> ^v <v>)}",
+            "sp {tie*pref (state <s> ^impasse tie ^operator <a> + ^operator <b> +) (<a> ^v <v>)"
+            " (<b> ^v < <v>) --> (<s> ^operator <a> > <b>)}",
+            "sp {tie*a (state <s> ^operator <e> ^superstate <ss>) (<e> ^name eval ^item <i>)"
+            " --> (<ss> ^operator <i> >) (<s> ^evaluated <i>)}",
+        ]
+    elif kind == 2:
+        lines += [
+            "sp {tie (state <s> ^impasse tie ^superstate <ss> ^item <i>) (<i> ^target.kind a)"
+            " --> (<ss> ^operator <i> !)}",
+            "sp {conf (state <s> ^impasse conflict ^superstate <ss> ^item <i>)"
+            " --> (<ss> ^operator <i> -)}",
+        ]
+    return lines + [
+        "sp {snc (state <s> ^impasse no-change ^attribute state ^superstate <ss>)"
+        " (<ss> ^count <c>) --> (<ss> ^count <c> - (+ <c> 1)) (<ss> ^snc yes)}",
+        "sp {onc (state <s> ^impasse no-change ^attribute operator ^superstate <ss>)"
+        " (<ss> ^operator <o>) --> (<s> ^operator <q> +) (<q> ^name fix)}",
+        "sp {oncfix (state <s> ^operator.name fix ^superstate <ss>) (<ss> ^count <c>)"
+        " --> (<ss> ^count <c> - (+ <c> 10))}",
+    ]
+
+
+@pytest.mark.parametrize("seed", range(64))
+def test_world_agent_behaves_as_in_the_kernel(seed: int, tmp_path) -> None:
+    path = tmp_path / "world.soar"
+    path.write_text(world_agent(seed))
+    theirs = run_kernel(path, decisions=40)
+    ours = run_ours(path, decisions=40)
+    assert "rror" not in theirs.trace
+    assert ours.halted == theirs.halted
+    assert ours.operators == theirs.operators
+    assert ours.output == theirs.output
+    keys = ("decisions", "production_firings", "elaboration_cycles", "wme_changes", "wm_size")
+    assert [getattr(ours, k) for k in keys] == [getattr(theirs, k) for k in keys]
+    assert sorted(ours.wm) == sorted(theirs.wm)
+
