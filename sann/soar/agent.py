@@ -495,6 +495,9 @@ class Agent:
         self._phase_timetag = 0
         # the newest timetag when the matcher's changes were last taken (_collect_changes)
         self._batch_start = 0
+        # (goal, instantiation) whose o-supported local preferences extend the goal's GDS
+        # once the wave's preferences are asserted (_grow_gds)
+        self._gds_requests: list[tuple[Goal, Instantiation]] = []
         # every earlier _batch_start that began a batch of new WMEs (see _entry_rank)
         self._batch_starts: list[int] = []
         # WMEs added and removed since the last trace of working-memory changes (watch 4+)
@@ -916,6 +919,8 @@ class Agent:
             pending_goal.pop(match, None)
             fired.append(fire(match, info, goal, o_support))
         self._assert_preferences(fired, o_support)
+        if self._gds_requests:
+            self._grow_gds()
         return True
 
     def _touches_level(self, match: object, info: ProductionInfo, change_level: int) -> bool:
@@ -2047,9 +2052,22 @@ class Agent:
         if results:
             self._justify(inst, results)
         if any(p.o_supported and p not in results for p in inst.prefs):
+            self._gds_requests.append((goal, inst))
+
+    def _grow_gds(self) -> None:
+        """Extend the goal dependency sets of the wave's o-supported local preferences,
+        once the wave's preferences are in their slots: the kernel elaborates a GDS through
+        the local i-supported WMEs' current acceptable preferences, so a WME that an
+        o-reject of the wave took away leads nowhere (measured in soar_sml: a counter made
+        by an elaboration on a superstate flag and modified by ``^steps <n> - (+ <n> 1)``
+        does not make the flag part of the GDS)."""
+        requests, self._gds_requests = self._gds_requests, []
+        for goal, inst in requests:
+            if not goal.alive:
+                continue
             # The kernel extends the GDS when the o-supported WME enters working memory,
             # so superstate WMEs that leave in that same phase are not part of it.
-            wmes = self._backtrace(inst, level, through_o_support=False)
+            wmes = self._backtrace(inst, goal.level, through_o_support=False)
             if goal.gds:
                 self._pending_gds.append((goal, wmes))
             else:  # a new GDS takes these WMEs at once (measured on the kernel)
@@ -2291,7 +2309,9 @@ class Agent:
                 if self._level_of(wme.id) < level:
                     grounds.setdefault(wme.timetag, wme)
                     continue
-                for source in self._supporting_instantiations(wme):
+                supports = (self._supporting_instantiations(wme) if through_o_support
+                            else self._current_supports(wme))
+                for source in supports:
                     if id(source) in seen:
                         continue
                     if not through_o_support and any(
@@ -2326,6 +2346,16 @@ class Agent:
                 if _vkey(pref.value) == key:
                     self._sources[wme] = pref.inst
                     return
+
+    def _current_supports(self, wme: WME) -> list[Instantiation]:
+        """The rule instantiations whose acceptable (or require) preferences hold ``wme``'s
+        value in its slot now: what the kernel's GDS elaboration follows."""
+        slot = self._slot(wme.id, wme.attr, create=False)
+        if slot is None:
+            return []
+        key = _vkey(wme.value)
+        return [pref.inst for ptype in (ACCEPTABLE, REQUIRE) for pref in slot.of_type(ptype)
+                if _vkey(pref.value) == key and not pref.inst.is_justification]
 
     def _supporting_instantiations(self, wme: WME) -> list[Instantiation]:
         source = self._sources.get(wme)

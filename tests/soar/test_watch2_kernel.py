@@ -32,6 +32,9 @@ Rules measured in the kernel:
 - At the end of an application phase the goal stack's decisions are checked only when
   its last elaboration cycle was IE: a tie that a PE cycle's result resolved stands until
   the propose phase.
+- A goal dependency set grows through a local i-supported WME only by the preferences
+  that hold it when the wave's preferences are asserted: a WME the same wave o-rejected
+  adds nothing.
 - A goal-dependency-set violation: on a fresh line 'Removing state S2 because element in
   GDS changed. WME: (...)', a blank line, '    REMOVING GOAL [S2] due to change in GDS
   WME (...)', each line ended.
@@ -150,6 +153,24 @@ HAND_WRITTEN.update({
     ]
     for attr in ("item", "non-numeric")
 })
+
+
+# A substate counter made by an elaboration that tests a superstate flag and modified by
+# an operator (``^steps <n> - (+ <n> 1)``): the o-reject took the elaboration's preference
+# away, so the flag is not in the goal dependency set; its change leaves the substate.
+HAND_WRITTEN["gds-through-a-rejected-elaboration"] = [
+    "sp {init (state <s> ^superstate nil -^count) --> (<s> ^operator <o> + >) (<o> ^name init)}",
+    "sp {init*a (state <s> ^operator.name init) --> (<s> ^count 0 ^thing t1 ^flag up)}",
+    "sp {top*work (state <s> ^superstate nil ^count 0 ^thing <t>) --> (<s> ^operator <o> +)"
+    " (<o> ^name work ^item <t>)}",
+    "sp {sub*elab (state <s> ^impasse no-change ^attribute operator ^superstate <ss>)"
+    " (<ss> ^operator <o> ^flag up) (<o> ^item <i>) --> (<s> ^target <i> ^steps 0)}",
+    "sp {sub*p (state <s> ^steps 0) --> (<s> ^operator <o> +) (<o> ^name step)}",
+    "sp {sub*a (state <s> ^operator.name step ^steps <n>) --> (<s> ^steps <n> - (+ <n> 1))}",
+    "sp {sub*p2 (state <s> ^steps 1) --> (<s> ^operator <o> +) (<o> ^name finish)}",
+    "sp {sub*a2 (state <s> ^operator.name finish ^superstate <ss>) (<ss> ^flag up)"
+    " --> (<ss> ^flag up - down)}",
+]
 
 
 # Known differences, still to fix (found while measuring the rules above).
