@@ -648,6 +648,14 @@ class Agent:
         dependents = self._dependents.pop(wme, None)
         if dependents:
             for inst in dependents:
+                source = inst.source
+                if source is not None and not source.alive and all(
+                    p.o_supported for p in inst.prefs
+                ):
+                    # Its retraction, which changes nothing, went with its substate
+                    # (measured: no elaboration cycle for it when the decision that
+                    # removed its ground removed the substate too).
+                    continue
                 self._schedule_retraction(inst)
         goals = self._gds_index.pop(wme, None)
         if goals:
@@ -2139,6 +2147,7 @@ class Agent:
             f"justify{2 * self._justifications - 1}", None, home, (), bool(operators), True
         )
         just.grounds = grounds
+        just.source = inst.goal
         if operators and _proposes_on_a_state(results):
             operators = []  # a proposal is i-supported, as a rule's (see is_o_supported)
         on_operator = [any(pref.id is op for op in operators) for pref in results]
@@ -2152,12 +2161,12 @@ class Agent:
         self._new_justifications.append(just)
         self._replace_duplicate_justification(just)
         self._justification_matches(inst.goal, home.level)
-        if not all(p.o_supported for p in just.prefs):
-            for wme in grounds:
-                self._dependents.setdefault(wme, []).append(just)
-        # A WME that a negated condition of it tested appearing retracts it even when its
-        # results are all o-supported: no preference changes, but it is activity at its
-        # level, like the kernel's (an elaboration cycle that fires nothing; measured).
+        # A WME it tested leaving, or one that a negated condition of it tested appearing,
+        # retracts it even when its results are all o-supported: no preference changes,
+        # but it is activity at its level, like the kernel's (an elaboration cycle that
+        # fires nothing; measured).
+        for wme in grounds:
+            self._dependents.setdefault(wme, []).append(just)
         self._watch_negations(just, visited, inst.goal.level)
         if home.level > 1:
             home.insts[just] = None

@@ -388,6 +388,7 @@ class Instantiation:
         "is_justification",
         "grounds",
         "retracted",
+        "source",
     )
 
     def __init__(
@@ -408,6 +409,8 @@ class Instantiation:
         self.is_justification = is_justification
         self.grounds: tuple[WME, ...] = ()
         self.retracted = False
+        # a justification's substate: its retraction is that goal's (see Agent)
+        self.source: Goal | None = None
 
     def __repr__(self) -> str:
         return f"<Instantiation {self.name} at {self.goal.id}>"
