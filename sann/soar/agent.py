@@ -2123,9 +2123,12 @@ class Agent:
         return out
 
     def _justify(self, inst: Instantiation, results: list[Preference]) -> None:
-        """Stand in for the substate's reasoning with a justification whose conditions are
-        the superstate WMEs the results depend on; its support is computed like a rule's:
-        o-support when those WMEs include the selected operator of its goal."""
+        """Stand in for the substate's reasoning with justifications whose conditions are
+        the superstate WMEs the results depend on. As in the kernel, the first lives one
+        level up and holds every result; when results go higher, that justification is an
+        instantiation with results of its own, justified one level further up, and so on
+        (measured in soar_sml: a result two levels up is asserted by '[level 2] (justify1)'
+        and by 'justify3', which stays when the middle state goes)."""
         visited: list[Instantiation] = []
         grounds = tuple(
             self._backtrace(inst, inst.goal.level, through_o_support=True, visited=visited)
@@ -2133,6 +2136,34 @@ class Agent:
         if not grounds:
             self._ignore_unconditional_justification(inst)
             return
+        home = inst.goal.superstate
+        assert home is not None  # results come from substates
+        just = self._make_justification(inst, results, grounds, home)
+        self._justification_matches(inst.goal, min(self._level_of(p.id) for p in results))
+        self._watch_negations(just, visited, inst.goal.level)
+        while home.superstate is not None:
+            higher = [p for p in just.prefs if self._level_of(p.id) < home.level]
+            if not higher:
+                break
+            more: list[Instantiation] = []
+            grounds = tuple(
+                self._backtrace(just, home.level, through_o_support=True, visited=more)
+            )
+            if not grounds:
+                break
+            # the negated conditions of every rule behind it (the first is the previous
+            # justification itself)
+            visited += more[1:]
+            source, home = home, home.superstate
+            just = self._make_justification(just, higher, grounds, home)
+            self._watch_negations(just, visited, source.level)
+
+    def _make_justification(
+        self, inst: Instantiation, results: list[Preference], grounds: tuple[WME, ...],
+        home: Goal,
+    ) -> Instantiation:
+        """A justification at ``home`` for ``inst``'s results; its support is computed like
+        a rule's: o-support when its conditions include the selected operator of its goal."""
         self._justifications += 1
         match_goal_id = self._goal_of_grounds(grounds).id
         operators = [
@@ -2140,11 +2171,10 @@ class Agent:
             for w in grounds
             if w.id is match_goal_id and w.attr == "operator" and not w.acceptable
         ]
-        home = self._goal_of_results(results)
         just = Instantiation(
             # the kernel spends two numbers on each justification (measured: justify1,
             # justify3, justify5, ...)
-            f"justify{2 * self._justifications - 1}", None, home, (), bool(operators), True
+            f"justify{2 * self._justifications - 1}", None, home, grounds, bool(operators), True
         )
         just.grounds = grounds
         just.source = inst.goal
@@ -2158,18 +2188,24 @@ class Agent:
             copy = Preference(pref.type, pref.id, pref.attr, pref.value, pref.referent, just)
             copy.o_supported = bool(operators) and not elaborates and not mixed
             just.prefs.append(copy)
+            if copy.o_supported and pref.type == REJECT:
+                # The copy is an o-reject, which takes the rule's own reject with it
+                # (measured in soar_sml: '+ (S1 ^x 5 -) [level 2]' is not asserted then).
+                pref.inst = None  # type: ignore[assignment]
         self._new_justifications.append(just)
         self._replace_duplicate_justification(just)
-        self._justification_matches(inst.goal, home.level)
         # A WME it tested leaving, or one that a negated condition of it tested appearing,
         # retracts it even when its results are all o-supported: no preference changes,
         # but it is activity at its level, like the kernel's (an elaboration cycle that
         # fires nothing; measured).
         for wme in grounds:
             self._dependents.setdefault(wme, []).append(just)
-        self._watch_negations(just, visited, inst.goal.level)
         if home.level > 1:
             home.insts[just] = None
+            level = home.level
+            if any(p.o_supported and self._level_of(p.id) == level for p in just.prefs):
+                self._gds_requests.append((home, just))
+        return just
 
     def _ignore_unconditional_justification(self, inst: Instantiation) -> None:
         """Results that test nothing in the superstate get no justification: the kernel
@@ -2284,15 +2320,6 @@ class Agent:
             if goal is not None and goal.level > best.level:
                 best = goal
         return best
-
-    def _goal_of_results(self, results: list[Preference]) -> Goal:
-        """The goal a justification lives with: the level of its highest result, so that
-        it survives the substates that made it."""
-        level = min(self._level_of(p.id) for p in results)
-        goal = self._top
-        while goal.sub is not None and goal.sub.level <= level:
-            goal = goal.sub
-        return goal
 
     def _backtrace(
         self,

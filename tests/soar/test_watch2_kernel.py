@@ -305,3 +305,57 @@ def test_a_justification_without_conditions_is_ignored_as_in_the_kernel(
     watch: int,
 ) -> None:
     same(kernel, UNCONDITIONAL[case], [f"watch {watch}", "run 3", "print --depth 2 s1"])
+
+
+RESULTS = {
+    # an o-supported justification's reject is an o-reject and takes the rule's own reject
+    "o-supported-reject-result": [
+        "sp {init (state <s> ^superstate nil -^count) --> (<s> ^operator <o> + >)"
+        " (<o> ^name init)}",
+        "sp {init*a (state <s> ^operator.name init) --> (<s> ^count 0 ^x 5)}",
+        "sp {top*work (state <s> ^superstate nil ^count 0) --> (<s> ^operator <o> +)"
+        " (<o> ^name work)}",
+        "sp {sub*res (state <s> ^superstate <ss>) (<ss> ^operator.name work ^x <x>)"
+        " --> (<ss> ^x <x> -) (<ss> ^y 1)}",
+    ],
+    # an i-supported one asserts both rejects
+    "i-supported-reject-result": [
+        "sp {init (state <s> ^superstate nil -^count) --> (<s> ^operator <o> + >)"
+        " (<o> ^name init)}",
+        "sp {init*a (state <s> ^operator.name init) --> (<s> ^count 0 ^x 5)}",
+        "sp {top*work (state <s> ^superstate nil ^count 0) --> (<s> ^operator <o> +)"
+        " (<o> ^name work)}",
+        "sp {sub*res (state <s> ^superstate <ss>) (<ss> ^x <x> ^count 0)"
+        " --> (<ss> ^x <x> -) (<ss> ^y 1)}",
+    ],
+    # results one and two levels up from one firing: justify1 one level up holds both,
+    # justify3 at the top holds the higher one; the middle state's GDS takes justify1's
+    # conditions, so its removal of (S1 ^count 0) removes the middle state
+    "results-two-levels-up": [
+        "sp {init (state <s> ^superstate nil -^count) --> (<s> ^operator <o> + >)"
+        " (<o> ^name init)}",
+        "sp {init*a (state <s> ^operator.name init) --> (<s> ^count 0)}",
+        "sp {top*work (state <s> ^superstate nil ^count < 3) --> (<s> ^operator <o> +)"
+        " (<o> ^name work)}",
+        "sp {sub*p (state <s> ^superstate.operator.name work -^went) --> (<s> ^operator <o> +)"
+        " (<o> ^name deeper)}",
+        "sp {deep*a (state <s> ^superstate.operator.name deeper ^superstate <mid>)"
+        " (<mid> ^superstate <top>) (<top> ^count <c>) --> (<top> ^count (+ <c> 1) <c> -)"
+        " (<mid> ^went yes)}",
+    ],
+}
+
+
+def _preference_lines(text: str) -> list[str]:
+    return [line for line in text.splitlines() if line.startswith(("+ (", "- ("))]
+
+
+@pytest.mark.parametrize("case", list(RESULTS))
+def test_result_preferences_and_justifications_as_in_the_kernel(kernel, case: str) -> None:  # noqa: F811
+    """The preference lines of watch 5: which justifications are made, at which level,
+    with which support, and which of the rule's own results are asserted."""
+    commands = ["watch 5", "run 8"]
+    expected = theirs(kernel, RESULTS[case], commands)[-1]
+    got = ours(RESULTS[case], commands)[-1]
+    assert _preference_lines(got) == _preference_lines(expected)
+    assert "justify" in expected
