@@ -2478,15 +2478,32 @@ def _entry_rank(wme: object, starts: list[int]) -> tuple[int, int]:
     return (-bisect_left(starts, timetag), timetag)
 
 
+def _creation_key(ranks: list[tuple[int, int]], sign: int) -> tuple:
+    """The order the kernel's Rete made tokens in, from the ``_entry_rank``s of their
+    WMEs in its condition order (``sign`` 1: made first first; -1: the reverse). A token
+    was made when its latest WME entered: by a right activation that visited the parent's
+    tokens latest made first, then by left activations down to here, each visiting its
+    alpha memory's WMEs latest entered first."""
+    if not ranks:
+        return ()
+    k = min(range(len(ranks)), key=ranks.__getitem__)  # the latest entered
+    latest = ranks[k]
+    return (
+        (-sign * latest[0], -sign * latest[1]),
+        *_creation_key(ranks[:k], -sign),
+        *[(sign * r[0], sign * r[1]) for r in ranks[k + 1:]],
+    )
+
+
 def _token_order(wmes: tuple, place: tuple, starts: list[int]) -> tuple:
     """The order in which one WME's activation of a join makes several matches, as the
     kernel's Rete does (measured in soar_sml: two ``^thing`` WMEs of one firing, then a
-    ``^count`` joined after them, fire the proposal of the older ``^thing`` first). Its
+    ``^count`` joined after them, fire the proposal of the older ``^thing`` first; items
+    whose tokens one ``^box`` WME made fire in the order its ``^item`` WMEs entered). Its
     memories list items newest first: a right activation visits the parent's tokens latest
-    made first, a left activation the alpha memory's WMEs latest entered first, at every
-    join below too. A token was made when its last WME entered."""
-    token = min((_entry_rank(wmes[j], starts) for j in place[1]), default=(1, 0))
-    return (token, *[_entry_rank(wmes[j], starts) for j in place[7]])
+    made first, a left activation the alpha memory's WMEs latest entered first."""
+    before = [_entry_rank(wmes[j], starts) for j in place[1]]
+    return (*_creation_key(before, -1), *[_entry_rank(wmes[j], starts) for j in place[7]])
 
 
 def _proposes_on_a_state(prefs: list[Preference]) -> bool:
