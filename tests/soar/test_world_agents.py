@@ -1,5 +1,6 @@
-"""Random "world" agents compared with the real Soar 9.6 kernel (soar_sml), whole behaviour.
+"""Random agents compared with the real Soar 9.6 kernel (soar_sml), whole behaviour.
 
+World agents:
 Each agent makes a few objects with kinds, values and links, elaborates them (predicates,
 disjunctions, negations, conjunctive negations, math), proposes operators on them with
 random preferences (several instantiations of one rule tie), prefers some over others,
@@ -10,6 +11,13 @@ the kernel's. Found this way (each now a kernel rule in the engine): the order o
 matches one WME makes at one join, the order of an alpha memory's joins relinked in one
 batch, the items of a conflict impasse, when the application phase checks the goal stack,
 and what an impasse's ``^item`` WME backtraces to.
+
+Deep agents: a top operator on an item has no application, so a substate works it out
+(counting steps, results of either support, a third level whose one firing makes results
+one and two levels up), with ties, elaborations of the items and goal dependency sets.
+Found this way: justifications chained level by level, an o-supported justification's
+reject taking the rule's own, the goal dependency set through rejected elaborations, the
+order of tokens one WME made.
 """
 
 from __future__ import annotations
@@ -154,12 +162,106 @@ def _impasses(r: random.Random) -> list[str]:
     ]
 
 
-@pytest.mark.parametrize("seed", range(64))
-def test_world_agent_behaves_as_in_the_kernel(seed: int, tmp_path) -> None:
-    path = tmp_path / "world.soar"
-    path.write_text(world_agent(seed))
-    theirs = run_kernel(path, decisions=40)
-    ours = run_ours(path, decisions=40)
+def deep_agent(seed: int) -> str:
+    """The rule file of one random deep agent."""
+    r = random.Random(seed)
+    lines = [f"indifferent-selection --{r.choice(['first', 'last'])}"]
+    count = r.randint(2, 4)
+    items = " ".join(f"<i{k}>" for k in range(count))
+    body = " ".join(
+        f"(<i{k}> ^id {k} ^w {r.randint(1, 9)} ^tag |t{r.randint(0, 2)}|)" for k in range(count)
+    )
+    lines += [
+        "sp {init (state <s> ^superstate nil -^count) --> (<s> ^operator <o> + >)"
+        " (<o> ^name init)}",
+        f"sp {{init*a (state <s> ^operator.name init) --> (<s> ^count 0 ^box <b>)"
+        f" (<b> ^item {items}) {body}}}",
+    ]
+    limit = r.randint(2, 5)
+    pref = r.choice(["+", "+ =", "+ = 0.5", "+ <", "+ >"])
+    test = r.choice(["", " ^w > 3", " ^tag |t1|", " -^done"])
+    lines.append(
+        f"sp {{top*work (state <s> ^superstate nil ^count <c> < {limit} ^box.item <i>)"
+        f" (<i> ^id <k>{test}) --> (<s> ^operator <o> {pref}) (<o> ^name work ^item <i>)}}"
+    )
+    if r.random() < 0.5:
+        lines.append(
+            "sp {top*pref (state <s> ^operator <a> + ^operator <b> +) (<a> ^item.w <x>)"
+            " (<b> ^item.w < <x>) --> (<s> ^operator <a> > <b>)}"
+        )
+    else:
+        lines += [
+            "sp {top*tie (state <s> ^impasse tie ^superstate <ss> ^item <o>) (<o> ^item.id 0)"
+            " --> (<ss> ^operator <o> >)}",
+            "sp {top*tie2 (state <s> ^impasse tie ^superstate <ss> ^item <o>)"
+            " (<o> ^item.id <> 0) --> (<ss> ^operator <o> <)}",
+        ]
+    lines.append(
+        "sp {sub*elab (state <s> ^impasse no-change ^attribute operator"
+        " ^superstate.operator <o>) (<o> ^item <i>) --> (<s> ^target <i> ^steps 0)}"
+    )
+    lines += _deep_work(r)
+    if r.random() < 0.5:
+        lines.append(
+            "sp {sub*gds (state <s> ^superstate.count <c> ^target <i>) --> (<s> ^seen <c>)}"
+        )
+    if r.random() < 0.5:
+        lines.append(
+            f"sp {{top*mark (state <s> ^superstate nil ^count > {r.randint(0, 2)}"
+            " ^box.item <i>) (<i> ^w <w> < 5) --> (<i> ^small (- 5 <w>))}"
+        )
+    lines += [
+        "sp {snc (state <s> ^impasse no-change ^attribute state ^superstate <ss>)"
+        " (<ss> ^count <c>) --> (<ss> ^count (+ <c> 1) <c> -)}",
+        f"sp {{done (state <s> ^superstate nil ^count >= {limit})"
+        " --> (write |done | (crlf)) (halt)}",
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def _deep_work(r: random.Random) -> list[str]:
+    """How the substate works its operator out."""
+    mode = r.randrange(4)
+    if mode == 0:  # an o-supported result at once
+        return [
+            "sp {sub*p (state <s> ^target <i> ^steps 0) --> (<s> ^operator <o> +)"
+            " (<o> ^name finish)}",
+            "sp {sub*a (state <s> ^operator.name finish ^target <i> ^superstate <ss>)"
+            " (<ss> ^count <c>) (<i> ^w <w>) --> (<ss> ^count (+ <c> 1) <c> -)"
+            f" (<i> ^done yes) (write |fin | (* <w> {r.randint(2, 5)}) (crlf))}}",
+        ]
+    if mode == 1:  # a local counter, then the result
+        steps = r.randint(1, 3)
+        return [
+            f"sp {{sub*p (state <s> ^steps <n> < {steps}) --> (<s> ^operator <o> +)"
+            " (<o> ^name step)}",
+            "sp {sub*a (state <s> ^operator.name step ^steps <n>)"
+            " --> (<s> ^steps <n> - (+ <n> 1))}",
+            f"sp {{sub*p2 (state <s> ^steps {steps}) --> (<s> ^operator <o> +)"
+            " (<o> ^name finish)}",
+            "sp {sub*a2 (state <s> ^operator.name finish ^superstate <ss> ^target <i>)"
+            " (<ss> ^count <c>) (<i> ^tag <t>) --> (<ss> ^count (+ <c> 1) <c> -)"
+            " (write (concat |done-| <t>) (crlf))}",
+        ]
+    if mode == 2:  # an i-supported result that the top applies
+        return [
+            "sp {sub*res (state <s> ^target <i> ^superstate <ss>) (<i> ^w <w>)"
+            " --> (<ss> ^suggest (+ <w> 10))}",
+            "sp {top*use (state <s> ^superstate nil ^operator <o> ^suggest <x> ^count <c>)"
+            " (<o> ^name work) --> (<s> ^count (+ <c> 1) <c> -) (write |use | <x> (crlf))}",
+        ]
+    return [  # a third level whose one firing makes results one and two levels up
+        "sp {sub*p (state <s> ^target <i> -^went) --> (<s> ^operator <o> +)"
+        " (<o> ^name deeper)}",
+        "sp {deep*a (state <s> ^superstate.operator.name deeper ^superstate <mid>)"
+        " (<mid> ^superstate <top>) (<top> ^count <c>) --> (<top> ^count (+ <c> 1) <c> -)"
+        " (<mid> ^went yes)}",
+    ]
+
+
+def _agree(path, decisions: int) -> None:
+    theirs = run_kernel(path, decisions=decisions)
+    ours = run_ours(path, decisions=decisions)
     assert "rror" not in theirs.trace
     assert ours.halted == theirs.halted
     assert ours.operators == theirs.operators
@@ -168,3 +270,16 @@ def test_world_agent_behaves_as_in_the_kernel(seed: int, tmp_path) -> None:
     assert [getattr(ours, k) for k in keys] == [getattr(theirs, k) for k in keys]
     assert sorted(ours.wm) == sorted(theirs.wm)
 
+
+@pytest.mark.parametrize("seed", range(64))
+def test_world_agent_behaves_as_in_the_kernel(seed: int, tmp_path) -> None:
+    path = tmp_path / "world.soar"
+    path.write_text(world_agent(seed))
+    _agree(path, 40)
+
+
+@pytest.mark.parametrize("seed", range(48))
+def test_deep_agent_behaves_as_in_the_kernel(seed: int, tmp_path) -> None:
+    path = tmp_path / "deep.soar"
+    path.write_text(deep_agent(seed))
+    _agree(path, 40)
