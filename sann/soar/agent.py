@@ -1167,15 +1167,18 @@ class Agent:
                         place = other
         # When its join was made, or relinked (see KernelOrder): the entry of the newest WME
         # before it, in the order the kernel's Rete took the WMEs in (_linked_rank).
+        # Joins relinked by one WME's entry go in the order it activated them: its
+        # (* ^attr *) memory before (* ^attr value), each's joins by path (measured).
         born = place[2]
         starts = self._batch_starts
-        linked = (bisect_left(starts, born), _LATEST)
+        linked: tuple = (bisect_left(starts, born), _LATEST)
         for j in place[1]:
             other_wme = wmes[j]
             if other_wme is not None and other_wme.timetag > born:
                 rank = (bisect_left(starts, other_wme.timetag), -other_wme.timetag)
-                if rank > linked:
-                    linked = rank
+                if rank > linked[:2]:
+                    other = places[j]
+                    linked = (*rank, other[0], other[3])
         if not tokens:
             return (newest, place[0], linked, place[3])
         return (newest, place[0], linked, place[3],
