@@ -18,6 +18,12 @@ one and two levels up), with ties, elaborations of the items and goal dependency
 Found this way: justifications chained level by level, an o-supported justification's
 reject taking the rule's own, the goal dependency set through rejected elaborations, the
 order of tokens one WME made.
+
+Preference agents: up to five top operators with random unary preferences (acceptable,
+indifferent with and without numbers, best, worst, require, prohibit, reject) and binary
+ones, both selection policies and numeric-indifferent modes, phases that switch which
+rules propose, and substates for tie, conflict and constraint-failure impasses. Found
+this way: the order of joins one WME relinks.
 """
 
 from __future__ import annotations
@@ -259,6 +265,71 @@ def _deep_work(r: random.Random) -> list[str]:
     ]
 
 
+PREFERENCES = ["+", "+", "+", "+ =", "+ = 0.4", "+ = 0.9", "+ >", "+ <", "+ !", "+ ~", "+ -",
+               "+ > =", "+ < ="]
+
+
+def preference_agent(seed: int) -> str:
+    """The rule file of one random preference agent."""
+    r = random.Random(seed)
+    lines = [f"indifferent-selection --{r.choice(['first', 'last'])}"]
+    if r.random() < 0.3:
+        lines.append(f"numeric-indifferent-mode --{r.choice(['sum', 'avg'])}")
+    count = r.randint(2, 5)
+    lines += [
+        "sp {init (state <s> ^superstate nil -^count) --> (<s> ^operator <o> + >)"
+        " (<o> ^name init)}",
+        "sp {init*a (state <s> ^operator.name init) --> (<s> ^count 0 ^phase a)}",
+    ]
+    for k in range(count):
+        pref = r.choice(PREFERENCES)
+        phase = r.choice(["a", "b", "<p>"])
+        lines.append(
+            f"sp {{prop{k} (state <s> ^superstate nil ^count <c> < 6 ^phase {phase})"
+            f" --> (<s> ^operator <o> {pref}) (<o> ^name op{k} ^v {r.randint(0, 4)})}}"
+        )
+    for k in range(r.randint(0, 4)):
+        x, y = r.sample(range(count), 2)
+        relation = r.choice([">", "<", "=", "= 0.2"])
+        lines.append(
+            f"sp {{bet{k} (state <s> ^operator <x> + ^operator <y> +) (<x> ^name op{x})"
+            f" (<y> ^name op{y}) --> (<s> ^operator <x> {relation} <y>)}}"
+        )
+    if r.random() < 0.5:
+        lines.append(
+            "sp {bv (state <s> ^operator <x> + ^operator <y> +) (<x> ^v <a>) (<y> ^v > <a>)"
+            " --> (<s> ^operator <y> > <x>)}"
+        )
+    lines += [
+        "sp {apply (state <s> ^operator <o> ^count <c> ^phase <p>) (<o> ^name <n> ^v <v>)"
+        " --> (<s> ^count (+ <c> 1) <c> -) (write <n> | | <v> (crlf))}",
+        "sp {flip (state <s> ^operator <o> ^phase a) (<o> ^v > 2) --> (<s> ^phase a - b)}",
+        "sp {flop (state <s> ^operator <o> ^phase b) (<o> ^v < 2) --> (<s> ^phase b - a)}",
+    ]
+    for kind in ("tie", "conflict", "constraint-failure"):
+        lines += _impasse_rule(r, kind)
+    lines += [
+        "sp {snc (state <s> ^impasse no-change ^attribute state ^superstate <ss>)"
+        " (<ss> ^count <c>) --> (<ss> ^count (+ <c> 1) <c> -) (write |snc| (crlf))}",
+        "sp {i*any (state <s> ^impasse <i> ^superstate.count <c> ^choices <ch>)"
+        " --> (write |impasse | <i> | | <ch> (crlf))}",
+        "sp {done (state <s> ^superstate nil ^count >= 6) --> (write |done| (crlf)) (halt)}",
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def _impasse_rule(r: random.Random, kind: str) -> list[str]:
+    action = r.choice(["best", "reject", "none", "require"])
+    head = f"sp {{i*{kind} (state <s> ^impasse {kind} ^superstate <ss> ^item <i>"
+    if action == "best":
+        return [head + " -^item {<j> > <i>}) --> (<ss> ^operator <i> >)}"]
+    if action == "reject":
+        return [head + ") (<i> ^v < 2) --> (<ss> ^operator <i> -)}"]
+    if action == "require":
+        return [head + ") (<i> ^v 3) --> (<ss> ^operator <i> !)}"]
+    return []
+
+
 def _agree(path, decisions: int) -> None:
     theirs = run_kernel(path, decisions=decisions)
     ours = run_ours(path, decisions=decisions)
@@ -282,4 +353,11 @@ def test_world_agent_behaves_as_in_the_kernel(seed: int, tmp_path) -> None:
 def test_deep_agent_behaves_as_in_the_kernel(seed: int, tmp_path) -> None:
     path = tmp_path / "deep.soar"
     path.write_text(deep_agent(seed))
+    _agree(path, 40)
+
+
+@pytest.mark.parametrize("seed", range(48))
+def test_preference_agent_behaves_as_in_the_kernel(seed: int, tmp_path) -> None:
+    path = tmp_path / "preferences.soar"
+    path.write_text(preference_agent(seed))
     _agree(path, 40)
