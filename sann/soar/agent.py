@@ -274,9 +274,9 @@ class Agent:
                                 f" {name} \n")
                 return
         self._by_shape.setdefault(key, []).append(production.name)
-        self.matcher.add_production(production)
         self._kernel_places[production.name] = self._kernel_order.add(production,
                                                                       self._timetag)
+        self.matcher.add_production(self._kernel_order.with_kernel_relations(production))
         info = ProductionInfo.of(production)
         self._load_count += 1
         info.load_index = self._load_count

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterable, Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from .production import (
     Action,
@@ -448,3 +448,80 @@ def positive_order(ordered: list[KCond]) -> list[int]:
 
 __all__ = ["KCond", "format_kcond", "kernel_conditions", "positive_order", "symbol_ages"]
 
+
+
+def with_kernel_relations(production: Production, ages: dict[tuple[type, object], int]
+                          ) -> Production:
+    """``production`` with each relational test on a variable that the kernel's order
+    binds only later moved, inverted, into the condition that binds it, against the
+    tested field's equality variable: the kernel's Rete runs it there, on that WME's value
+    (``{<w> >= <v>}`` becomes ``{<v> <= <w>}``). It matters when the two values are of
+    different kinds, where ``<`` and ``<=`` hold and ``>`` and ``>=`` do not (measured in
+    soar_sml). Tests of negated conditions and inside ``-{...}`` stay where they are."""
+    ordered = kernel_conditions(production, ages, {})
+    positive = [k for k in ordered if not k.negated and not k.is_ncc]
+    moves: dict[int, list[tuple[str, object, object]]] = {}  # id(condition) -> changes
+    bound: set[str] = set()
+    for position, kcond in enumerate(positive):
+        cond = kcond.element
+        assert isinstance(cond, Condition)
+        own = {name for _, test in _fields(cond) for name in _equalities(test)}
+        for field_name, test in _fields(cond):
+            equality = next(iter(_equalities(test)), None)
+            for rel in _relationals(test):
+                var = rel.operand.name  # type: ignore[union-attr]
+                if equality is None or var in bound or var in own:
+                    continue
+                target = next((k.element for k in positive[position + 1:]
+                               if var in {n for _, t in _fields(k.element)  # type: ignore[arg-type]
+                                          for n in _equalities(t)}), None)
+                if target is None:
+                    continue
+                moves.setdefault(id(cond), []).append((field_name, rel, None))
+                moves.setdefault(id(target), []).append(
+                    (_field_of(target, var), None,  # type: ignore[arg-type]
+                     Relational(_INVERSE.get(rel.op, rel.op), Var(equality))))
+        bound |= own
+    if not moves:
+        return production
+    conditions = tuple(_moved(c, moves[id(c)]) if id(c) in moves else c
+                       for c in production.conditions)
+    return replace(production, conditions=conditions)
+
+
+_FIELDS = ("id_test", "attr_test", "value_test")
+
+
+def _fields(cond: Condition) -> list[tuple[str, Test]]:
+    return [(name, getattr(cond, name)) for name in _FIELDS]
+
+
+def _equalities(test: Test) -> list[str]:
+    if isinstance(test, Var):
+        return [test.name]
+    if isinstance(test, Conjunction):
+        return [t.name for t in test.tests if isinstance(t, Var)]
+    return []
+
+
+def _relationals(test: Test) -> list[Relational]:
+    tests = test.tests if isinstance(test, Conjunction) else (test,)
+    return [t for t in tests if isinstance(t, Relational) and isinstance(t.operand, Var)]
+
+
+def _field_of(cond: Condition, var: str) -> str:
+    return next(name for name, test in _fields(cond) if var in _equalities(test))
+
+
+def _moved(cond: Condition, changes: list[tuple[str, object, object]]) -> Condition:
+    """``cond`` without the moved-away tests and with the moved-in ones."""
+    fields = dict(_fields(cond))
+    for name, removed, added in changes:
+        test = fields[name]
+        tests = list(test.tests) if isinstance(test, Conjunction) else [test]
+        if removed is not None:
+            tests = [t for t in tests if t is not removed]
+        if added is not None:
+            tests.append(added)
+        fields[name] = tests[0] if len(tests) == 1 else Conjunction(tuple(tests))
+    return replace(cond, **fields)

@@ -107,28 +107,25 @@ def _const_order(mixed: bool, holds: Callable[[Symbol, Symbol], bool]
     return test
 
 
+#: Relational tests as the 9.6 kernel's Rete runs them on the tested WME's value and the
+#: other symbol (a constant, or a variable's value): numbers with numbers, strings with
+#: strings; when the two are of different kinds (number, string, identifier), ``<`` and
+#: ``<=`` hold and ``>`` and ``>=`` do not — so both ``abc < 5`` and ``5 < abc`` hold, as
+#: soar_sml shows (for a variable too: ``-{(<y> ^p > <v>)}`` with <v> 1.5 is not blocked
+#: by ^p |changed|, ``-{(<y> ^p < <v>)}`` is). The kernel's reorderer may move a test on a
+#: variable bound later into that variable's condition, inverted; such a test is run the
+#: other way round there (not modelled: see ``symbol_order_less`` for a total order).
 _RELATIONS: dict[str, Callable[[Symbol, Symbol], bool]] = {
     "<>": lambda a, b: not (a.__class__ is b.__class__ and a == b),
-    "<": symbol_order_less,
-    ">": lambda a, b: symbol_order_less(b, a),
-    "<=": _less_equal,
-    ">=": lambda a, b: _less_equal(b, a),
+    "<": _const_order(True, symbol_order_less),
+    ">": _const_order(False, lambda a, b: symbol_order_less(b, a)),
+    "<=": _const_order(True, _less_equal),
+    ">=": _const_order(False, lambda a, b: _less_equal(b, a)),
     "<=>": lambda a, b: a.__class__ is b.__class__,
     "@": lambda a, b: False,
     "!@": lambda a, b: True,
 }
-
-#: Relational tests against a constant (``^size > 3``).  The 9.6 kernel orders those
-#: differently from tests against a variable: when the value and the constant are of
-#: different kinds (number, string, identifier), ``<`` and ``<=`` hold and ``>`` and ``>=``
-#: do not — so both ``abc < 5`` and ``5 < abc`` hold, as soar_sml shows.
-_CONST_RELATIONS: dict[str, Callable[[Symbol, Symbol], bool]] = {
-    **_RELATIONS,
-    "<": _const_order(True, symbol_order_less),
-    "<=": _const_order(True, _less_equal),
-    ">": _const_order(False, lambda a, b: symbol_order_less(b, a)),
-    ">=": _const_order(False, lambda a, b: _less_equal(b, a)),
-}
+_CONST_RELATIONS = _RELATIONS
 
 
 # ---------------------------------------------------------------------------------------------
@@ -2680,6 +2677,11 @@ class KernelOrder:
                                  twins, position, pnode.born, after)
         self._places[production.name] = places  # shared with the caller: see restart
         return places
+
+    def with_kernel_relations(self, production: Production) -> Production:
+        """``production`` with its relational tests where the kernel's Rete runs them
+        (``reorder.with_kernel_relations``; call after ``add``, which ages its constants)."""
+        return self._reorder.with_kernel_relations(production, self._ages)
 
     def restart(self) -> None:
         """Working memory was emptied (init-soar): every join counts as made before it."""

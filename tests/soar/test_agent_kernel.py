@@ -397,3 +397,27 @@ def test_conflict_items_are_every_candidate(name: str, tmp_path) -> None:
     assert ours == theirs
     assert our_trace == their_trace
     assert sum(f"conflict {n}" in our_trace for n in "abc") == 3
+
+
+RELATION_PAIRS = [("1.5", "|changed|"), ("|changed|", "1.5"), ("2", "abc"), ("1", "1.5")]
+
+
+@pytest.mark.parametrize("op", ["<", ">", "<=", ">="])
+@pytest.mark.parametrize("pair", RELATION_PAIRS, ids="-".join)
+def test_relations_between_variables_match_as_in_the_kernel(pair, op: str, tmp_path) -> None:
+    """Values of different kinds: where the kernel's reorderer moves a test into the
+    condition that binds its variable (inverted), and inside a conjunctive negation where
+    it stays, ``<``/``<=`` hold and ``>``/``>=`` do not on the value tested there."""
+    x, y = pair
+    text = (
+        f"sp {{init (state <s> ^superstate nil) --> (<s> ^a <x> ^b <y>) (<x> ^p {x})"
+        f" (<y> ^p {y})}}\n"
+        f"sp {{t (state <s> ^a.p <v> ^b.p {{<w> {op} <v>}}) --> (write |yes | <w> (crlf))}}\n"
+        f"sp {{tneg (state <s> ^a.p <v>) -{{(<s> ^b.p {{<w> {op} <v>}})}}"
+        " --> (write |none | <v> (crlf))}\n"
+        "sp {mix (state <s> ^base <b> ^v {<x> < <b>}) --> (write |lt | <x> (crlf))}\n"
+        "sp {base (state <s> ^superstate nil) --> (<s> ^base 5 ^v 3 abc <o>) (<o> ^k 1)}\n"
+    )
+    theirs, their_trace = kernel_run(text, 1, tmp_path)
+    ours, our_trace = our_run(text, 1)
+    assert sorted(our_trace.splitlines()) == sorted(their_trace.splitlines())

@@ -100,18 +100,21 @@ def test_conjunction_binds_and_tests(world: World) -> None:
 # ----- relational tests -----------------------------------------------------------------------
 
 
-def test_relations_between_variables_use_the_kernel_order(world: World) -> None:
+def test_relations_between_variables_as_the_kernel_runs_them(world: World) -> None:
+    """A test runs on the tested WME's value against the bound value: numbers with numbers
+    (int and float alike), and between kinds ``<`` and ``<=`` hold, ``>`` and ``>=`` do
+    not, as against a constant. (The agent first moves a test on a variable the kernel's
+    order binds later into that variable's condition, inverted: test_agent_kernel.)"""
     other = world.new("A")
     world.add(world.s1, "base", 5)
     for value in (3, 5, 7.5, "abc", other):
         world.add(world.s1, "v", value)
     for name, op in [("lt", "<"), ("le", "<="), ("gt", ">"), ("ge", ">=")]:
         world.rule(f"(state <s> ^base <b> ^v {{<x> {op} <b>}})", name)
-    # identifiers < numbers < strings; numbers compare numerically across int/float
-    assert world.values("lt", "x") == [3, other]
-    assert world.values("le", "x") == [3, 5, other]
-    assert world.values("gt", "x") == ["abc", 7.5]
-    assert world.values("ge", "x") == ["abc", 5, 7.5]
+    assert world.values("lt", "x") == ["abc", 3, other]
+    assert world.values("le", "x") == ["abc", 3, 5, other]
+    assert world.values("gt", "x") == [7.5]
+    assert world.values("ge", "x") == [5, 7.5]
 
 
 def test_relations_against_constants_follow_the_kernel(world: World) -> None:
