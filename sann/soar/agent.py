@@ -1048,10 +1048,42 @@ class Agent:
             if len(made) > 1:
                 made = self._kernel_sorted(made, [inst.match for inst in made], True)
             if len(removed) > 1:
-                removed = self._kernel_sorted(removed, [inst.match for inst in removed], True)
+                removed = self._found_order(removed)
             fired = made + removed
         for inst in fired:
             self._schedule_retraction(inst)
+
+    def _found_order(self, removed: list[Instantiation]) -> list[Instantiation]:
+        """Fired matches that lost a WME, in the order the kernel's Rete finds them (to be
+        retracted last found first): a removed WME's tokens are walked newest first (its
+        ``w->tokens`` list), each with its subtree, so they retract in the order their
+        tokens were made. Measured in soar_sml: when ``(S1 ^count 0)`` leaves, pop1 of
+        ``(S1 ^thing T4)`` retracts before pop1 of the older ``(S1 ^thing T1)``: the count
+        join made its tokens visiting the parent's newest first. A match was made when the
+        last of its WMEs entered the Rete (``_creation_keys``), not by its newest WME."""
+        keys = self._creation_keys([inst.match for inst in removed])
+        order = sorted(range(len(removed)), key=keys.__getitem__, reverse=True)
+        return [removed[k] for k in order]
+
+    def _creation_keys(self, matches: list) -> list[tuple]:
+        """Sort keys of the order the kernel's Rete made ``matches`` in: the batch of the
+        newest WME, then the WME of that batch that entered last (a batch enters newest
+        first: its oldest), then, only for ties, ``_kernel_key`` with the token order."""
+        starts = self._batch_starts
+        creator = self._creator
+        creators = []
+        firsts = []
+        for match in matches:
+            batch = bisect_left(starts, match.newest[0])
+            made = creator(match, starts[batch - 1] if batch else 0)
+            creators.append(made)
+            firsts.append((batch, -made[0]))
+        if len(set(firsts)) == len(firsts):
+            return firsts
+        key = self._kernel_key
+        return _same_join_linked([
+            first + key(match, made, True)[1:]
+            for first, match, made in zip(firsts, matches, creators, strict=True)])
 
     def _queue_matches(self, new: list) -> None:
         """Queue new matches at their goals as i- or o-assertions."""
