@@ -489,7 +489,8 @@ class Agent:
         self._nil_retractions: list[Instantiation] = []
         self._changed: list[Slot] = []
         self._changed_context: list[Slot] = []
-        self._new_justifications: list[Instantiation] = []
+        # (instantiation, the justification of its results) made in this wave
+        self._new_justifications: list[tuple[Instantiation, Instantiation]] = []
         self._refs: dict[Identifier, int] = {}
         self._in_wm_phase = False
         self._phase_timetag = 0
@@ -1304,7 +1305,7 @@ class Agent:
         ``o_support``: the wave fired o-assertions (an i-assertion wave makes no o-supported
         preference; a justification may)."""
         justifications, self._new_justifications = self._new_justifications, []
-        insts = [*reversed(justifications), *reversed(fired)] if justifications else fired[::-1]
+        insts = _with_justifications(fired, justifications) if justifications else fired[::-1]
         tracing = self.trace_level >= 5
         # The kernel takes the o-rejects in the reverse of the order it asserts the rest
         # (measured: '- (S1 ^last-moved other ...)' of the last rule to assert, before the
@@ -2163,7 +2164,7 @@ class Agent:
             copy = Preference(pref.type, pref.id, pref.attr, pref.value, pref.referent, just)
             copy.o_supported = bool(operators) and not elaborates and not mixed
             just.prefs.append(copy)
-        self._new_justifications.append(just)
+        self._new_justifications.append((inst, just))
         self._replace_duplicate_justification(just)
         self._justification_matches(inst.goal, home.level)
         if not all(p.o_supported for p in just.prefs):
@@ -2433,6 +2434,30 @@ def _same_join_linked(keys: list[tuple]) -> list[tuple]:
                 first[group] = key[3]
     return [(*key[:3], first[(key[0], key[1], key[2], key[4])], *key[4:]) if len(key) > 5
             else key for key in keys]
+
+
+def _with_justifications(fired: list[Instantiation],
+                         justifications: list[tuple[Instantiation, Instantiation]]
+                         ) -> list[Instantiation]:
+    """The order the kernel asserts a wave's preferences in: the instantiations the wave
+    fired, the last first, each right after the justification of its results (measured
+    in soar_sml: sx then sy fire in a substate, the kernel traces '+ ... (justify3)',
+    '+ ... [level 2] (sy)', '+ ... (justify1)', '+ ... [level 2] (sx)'; with snc fired
+    for counts 0 then 2, justify7 and snc of count 2 come first, so (S1 ^count 3) gets the
+    older timetag). We asserted all the justifications first."""
+    made: dict[int, list[Instantiation]] = {}
+    for source, just in justifications:
+        made.setdefault(id(source), []).append(just)
+    insts: list[Instantiation] = []
+    for inst in reversed(fired):
+        justs = made.pop(id(inst), None)
+        if justs:
+            insts += reversed(justs)
+        insts.append(inst)
+    if made:  # not of this wave's firings (none known): first, as before
+        others = [just for justs in made.values() for just in justs]
+        insts[:0] = reversed(others)
+    return insts
 
 
 def _entry_rank(wme: object, starts: list[int]) -> tuple[int, int]:

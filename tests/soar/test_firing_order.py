@@ -179,3 +179,26 @@ sp {done (state <s> ^superstate nil ^count >= 4) --> (write |done| (crlf)) (halt
 def test_removed_wme_retracts_its_matches_in_token_order(text: str, tmp_path) -> None:
     assert _retracted(_our_trace(text, 12, 5)) == _retracted(
         _kernel_trace(text, 12, tmp_path, 5))
+
+
+def _asserted(trace: str) -> list[str]:
+    """The preferences asserted and the WMEs added, in order, with timetags."""
+    return [line.strip() for line in trace.splitlines()
+            if line.startswith("+ (") or line.startswith("=>WM:")]
+
+
+# sx then sy fire in one wave of the substate: the kernel asserts the last first, each
+# right after the justification of its results (justify3, sy, justify1, sx).
+RESULTS = """
+sp {top (state <s> ^superstate nil) --> (<s> ^operator <o> +) (<o> ^name go)}
+sp {sx (state <s> ^superstate <ss>) (<ss> ^operator.name go) --> (<ss> ^rx 1)}
+sp {sy (state <s> ^superstate <ss>) (<ss> ^operator.name go) --> (<ss> ^ry 1)}
+sp {fx (state <s> ^superstate nil ^rx 1) --> (<s> ^fx 1)}
+sp {fy (state <s> ^superstate nil ^ry 1) --> (<s> ^fy 1)}
+"""
+
+
+def test_results_follow_their_justifications(tmp_path) -> None:
+    text = RESULTS
+    assert _asserted(_our_trace(text, 15, 5)) == _asserted(
+        _kernel_trace(text, 15, tmp_path, 5))
