@@ -906,16 +906,22 @@ class Agent:
         o_support = firing == "PE"
         pending_goal = self._pending_goal
         fire = self._fire
+        postponed: list[tuple[object, ProductionInfo]] = []
         for match, info in reversed(matches):
             if type(match) is _JustificationMatch:
                 if change_level and match.level <= change_level:
-                    queue[match] = info
+                    postponed.append((match, info))
                 continue
             if change_level and self._touches_level(match, info, change_level):
-                queue[match] = info
+                postponed.append((match, info))
                 continue
             pending_goal.pop(match, None)
             fired.append(fire(match, info, goal, o_support))
+        if postponed:
+            # They keep their places in the queue (measured in soar_sml: two snc matches
+            # the waterfall put off, of (S1 ^count 2) and the newer-entered (S1 ^count 0),
+            # fire count 0 first, as they would have; we had reversed them).
+            queue.update(reversed(postponed))
         self._assert_preferences(fired, o_support)
         return True
 

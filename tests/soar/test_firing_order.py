@@ -198,7 +198,11 @@ sp {fy (state <s> ^superstate nil ^ry 1) --> (<s> ^fy 1)}
 """
 
 
-def test_results_follow_their_justifications(tmp_path) -> None:
-    text = RESULTS
+@pytest.mark.parametrize("text", [RESULTS, generated_agent(2)], ids=["results", "agent-2"])
+def test_results_follow_their_justifications(text: str, tmp_path) -> None:
+    """Agent 2: two snc matches the waterfall put off keep their places in the queue
+    (count 0's, the later made, fires first: justify5), and each firing's results come
+    right after its justification (justify7, snc of count 2, justify5, snc of count 0),
+    which gives (S1 ^count 1) timetag 40 and (S1 ^count 3) 39."""
     assert _asserted(_our_trace(text, 15, 5)) == _asserted(
         _kernel_trace(text, 15, tmp_path, 5))
