@@ -1088,6 +1088,12 @@ class Agent:
         if len(set(firsts)) == len(firsts):
             return firsts
         key = self._kernel_key
+        keys = [first + key(match, made)[1:]
+                for first, match, made in zip(firsts, matches, creators, strict=True)]
+        # Matches of different joins (the usual tie: several rules on the WME) need no
+        # token order; only those of one join do (see _same_join_linked).
+        if len({(k[:3], k[4:]) for k in keys}) == len(keys):
+            return keys
         return _same_join_linked([
             first + key(match, made, True)[1:]
             for first, match, made in zip(firsts, matches, creators, strict=True)])
