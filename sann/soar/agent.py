@@ -489,7 +489,8 @@ class Agent:
         self._nil_retractions: list[Instantiation] = []
         self._changed: list[Slot] = []
         self._changed_context: list[Slot] = []
-        self._new_justifications: list[Instantiation] = []
+        # (instantiation, the justification of its results) made in this wave
+        self._new_justifications: list[tuple[Instantiation, Instantiation]] = []
         self._refs: dict[Identifier, int] = {}
         self._in_wm_phase = False
         self._phase_timetag = 0
@@ -916,16 +917,22 @@ class Agent:
         o_support = firing == "PE"
         pending_goal = self._pending_goal
         fire = self._fire
+        postponed: list[tuple[object, ProductionInfo]] = []
         for match, info in reversed(matches):
             if type(match) is _JustificationMatch:
                 if change_level and match.level <= change_level:
-                    queue[match] = info
+                    postponed.append((match, info))
                 continue
             if change_level and self._touches_level(match, info, change_level):
-                queue[match] = info
+                postponed.append((match, info))
                 continue
             pending_goal.pop(match, None)
             fired.append(fire(match, info, goal, o_support))
+        if postponed:
+            # They keep their places in the queue (measured in soar_sml: two snc matches
+            # the waterfall put off, of (S1 ^count 2) and the newer-entered (S1 ^count 0),
+            # fire count 0 first, as they would have; we had reversed them).
+            queue.update(reversed(postponed))
         self._assert_preferences(fired, o_support)
         if self._gds_requests:
             self._grow_gds()
@@ -1061,10 +1068,48 @@ class Agent:
             if len(made) > 1:
                 made = self._kernel_sorted(made, [inst.match for inst in made], True)
             if len(removed) > 1:
-                removed = self._kernel_sorted(removed, [inst.match for inst in removed], True)
+                removed = self._found_order(removed)
             fired = made + removed
         for inst in fired:
             self._schedule_retraction(inst)
+
+    def _found_order(self, removed: list[Instantiation]) -> list[Instantiation]:
+        """Fired matches that lost a WME, in the order the kernel's Rete finds them (to be
+        retracted last found first): a removed WME's tokens are walked newest first (its
+        ``w->tokens`` list), each with its subtree, so they retract in the order their
+        tokens were made. Measured in soar_sml: when ``(S1 ^count 0)`` leaves, pop1 of
+        ``(S1 ^thing T4)`` retracts before pop1 of the older ``(S1 ^thing T1)``: the count
+        join made its tokens visiting the parent's newest first. A match was made when the
+        last of its WMEs entered the Rete (``_creation_keys``), not by its newest WME."""
+        keys = self._creation_keys([inst.match for inst in removed])
+        order = sorted(range(len(removed)), key=keys.__getitem__, reverse=True)
+        return [removed[k] for k in order]
+
+    def _creation_keys(self, matches: list) -> list[tuple]:
+        """Sort keys of the order the kernel's Rete made ``matches`` in: the batch of the
+        newest WME, then the WME of that batch that entered last (a batch enters newest
+        first: its oldest), then, only for ties, ``_kernel_key`` with the token order."""
+        starts = self._batch_starts
+        creator = self._creator
+        creators = []
+        firsts = []
+        for match in matches:
+            batch = bisect_left(starts, match.newest[0])
+            made = creator(match, starts[batch - 1] if batch else 0)
+            creators.append(made)
+            firsts.append((batch, -made[0]))
+        if len(set(firsts)) == len(firsts):
+            return firsts
+        key = self._kernel_key
+        keys = [first + key(match, made)[1:]
+                for first, match, made in zip(firsts, matches, creators, strict=True)]
+        # Matches of different joins (the usual tie: several rules on the WME) need no
+        # token order; only those of one join do (see _same_join_linked).
+        if len({(k[:3], k[4:]) for k in keys}) == len(keys):
+            return keys
+        return _same_join_linked([
+            first + key(match, made, True)[1:]
+            for first, match, made in zip(firsts, matches, creators, strict=True)])
 
     def _queue_matches(self, new: list) -> None:
         """Queue new matches at their goals as i- or o-assertions."""
@@ -1288,7 +1333,7 @@ class Agent:
         ``o_support``: the wave fired o-assertions (an i-assertion wave makes no o-supported
         preference; a justification may)."""
         justifications, self._new_justifications = self._new_justifications, []
-        insts = [*reversed(justifications), *reversed(fired)] if justifications else fired[::-1]
+        insts = _with_justifications(fired, justifications) if justifications else fired[::-1]
         tracing = self.trace_level >= 5
         # The kernel takes the o-rejects in the reverse of the order it asserts the rest
         # (measured: '- (S1 ^last-moved other ...)' of the last rule to assert, before the
@@ -2141,7 +2186,7 @@ class Agent:
             return
         home = inst.goal.superstate
         assert home is not None  # results come from substates
-        just = self._make_justification(inst, results, grounds, home)
+        just = self._make_justification(inst, results, grounds, home, inst)
         self._justification_matches(inst.goal, min(self._level_of(p.id) for p in results))
         self._watch_negations(just, visited, inst.goal.level)
         while home.superstate is not None:
@@ -2158,15 +2203,17 @@ class Agent:
             # justification itself)
             visited += more[1:]
             source, home = home, home.superstate
-            just = self._make_justification(just, higher, grounds, home)
+            just = self._make_justification(just, higher, grounds, home, inst)
             self._watch_negations(just, visited, source.level)
 
     def _make_justification(
         self, inst: Instantiation, results: list[Preference], grounds: tuple[WME, ...],
-        home: Goal,
+        home: Goal, fired: Instantiation,
     ) -> Instantiation:
         """A justification at ``home`` for ``inst``'s results; its support is computed like
-        a rule's: o-support when its conditions include the selected operator of its goal."""
+        a rule's: o-support when its conditions include the selected operator of its goal.
+        ``fired``: the rule instantiation whose firing made it (its preferences are
+        asserted next to that one's, see ``_with_justifications``)."""
         self._justifications += 1
         match_goal_id = self._goal_of_grounds(grounds).id
         operators = [
@@ -2195,7 +2242,7 @@ class Agent:
                 # The copy is an o-reject, which takes the rule's own reject with it
                 # (measured in soar_sml: '+ (S1 ^x 5 -) [level 2]' is not asserted then).
                 pref.inst = None  # type: ignore[assignment]
-        self._new_justifications.append(just)
+        self._new_justifications.append((fired, just))
         self._replace_duplicate_justification(just)
         # A WME it tested leaving, or one that a negated condition of it tested appearing,
         # retracts it even when its results are all o-supported: no preference changes,
@@ -2470,6 +2517,30 @@ def _same_join_linked(keys: list[tuple]) -> list[tuple]:
                 first[group] = key[3]
     return [(*key[:3], first[(key[0], key[1], key[2], key[4])], *key[4:]) if len(key) > 5
             else key for key in keys]
+
+
+def _with_justifications(fired: list[Instantiation],
+                         justifications: list[tuple[Instantiation, Instantiation]]
+                         ) -> list[Instantiation]:
+    """The order the kernel asserts a wave's preferences in: the instantiations the wave
+    fired, the last first, each right after the justification of its results (measured
+    in soar_sml: sx then sy fire in a substate, the kernel traces '+ ... (justify3)',
+    '+ ... [level 2] (sy)', '+ ... (justify1)', '+ ... [level 2] (sx)'; with snc fired
+    for counts 0 then 2, justify7 and snc of count 2 come first, so (S1 ^count 3) gets the
+    older timetag). We asserted all the justifications first."""
+    made: dict[int, list[Instantiation]] = {}
+    for source, just in justifications:
+        made.setdefault(id(source), []).append(just)
+    insts: list[Instantiation] = []
+    for inst in reversed(fired):
+        justs = made.pop(id(inst), None)
+        if justs:
+            insts += reversed(justs)
+        insts.append(inst)
+    if made:  # not of this wave's firings (none known): first, as before
+        others = [just for justs in made.values() for just in justs]
+        insts[:0] = reversed(others)
+    return insts
 
 
 def _entry_rank(wme: object, starts: list[int]) -> tuple[int, int]:

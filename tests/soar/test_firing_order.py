@@ -107,3 +107,102 @@ def test_generated_agent_fires_in_kernel_order(seed: int, tmp_path) -> None:
     removed WMEs first, then those a new WME blocked, each oldest match first."""
     text = generated_agent(seed)
     assert our_events(text, 3) == kernel_events(text, 3, tmp_path)
+
+
+def _kernel_trace(text: str, decisions: int, tmp_path, level: int) -> str:
+    path = tmp_path / "agent.soar"
+    path.write_text(text)
+    kernel = sml.Kernel.CreateKernelInCurrentThread(True, 0)
+    try:
+        agent = kernel.CreateAgent("order")
+        log: list[str] = []
+        agent.RegisterForPrintEvent(
+            sml.smlEVENT_PRINT, lambda mid, ud, ag, msg: log.append(msg), None
+        )
+        agent.ExecuteCommandLine(f"source {path}")
+        agent.ExecuteCommandLine(f"watch {level}")
+        log.clear()
+        agent.ExecuteCommandLine(f"run {decisions}")
+    finally:
+        kernel.Shutdown()
+    return "".join(log)
+
+
+def _our_trace(text: str, decisions: int, level: int) -> str:
+    out = io.StringIO()
+    agent = Agent(out=out)
+    agent.load(text)
+    agent.trace(level)
+    agent.run(decisions)
+    return out.getvalue()
+
+
+def _retracted(trace: str) -> list[str]:
+    """The preferences retracted, in order, with their identifiers (which tell the
+    matches of one rule apart)."""
+    return [line.strip() for line in trace.splitlines() if line.startswith("- (")]
+
+
+# (S1 ^count 0) enters after the three ^thing WMEs of its batch (a batch enters newest
+# first), so the count join makes its tokens visiting the parent's newest first: seen of
+# T3, T2, T1; when it leaves, its tokens are found newest first and retracted last found
+# first: T3, T2, T1 (we retracted by each match's newest WME: T1 first).
+TOKEN_RETRACTION = """
+sp {propose (state <s> ^superstate nil -^count) --> (<s> ^operator <o> + !) (<o> ^name init)}
+sp {init (state <s> ^operator.name init)
+   --> (<s> ^count 0 ^thing <t1> <t2> <t3>) (<t1> ^kind a) (<t2> ^kind a) (<t3> ^kind a)}
+sp {seen (state <s> ^superstate nil ^count <c> ^thing <t>) (<t> ^kind a) --> (<s> ^seen <t>)}
+sp {propose*bump (state <s> ^count 0) --> (<s> ^operator <o> + !) (<o> ^name bump)}
+sp {bump (state <s> ^operator.name bump ^count 0) --> (<s> ^count 0 - 1)}
+"""
+
+# Generated agent 220 (/work/fuzz/gen.py): when (S1 ^count 0) leaves, pop1 of O3 (T4)
+# retracts before pop1 of O2 (T1)
+COUNT_RETRACTION = """indifferent-selection --first
+sp {init (state <s> ^superstate nil -^count) --> (<s> ^operator <o> + >) (<o> ^name init)}
+sp {init*a (state <s> ^operator.name init)
+   --> (<s> ^count 0 ^thing <t0> <t1> <t2> <t3>) (<t0> ^kind a ^val 3)
+       (<t1> ^kind b ^val 5 ^link <t0>) (<t2> ^kind b ^val 1) (<t3> ^kind a ^val 3)}
+sp {elab2 (state <s> ^superstate nil ^count <c>) --> (<s> ^half (div <c> 2) ^ratio (/ <c> 4.0))}
+sp {pop1 (state <s> ^superstate nil ^count <c> < 4 ^thing <t>) (<t> ^kind a)
+   --> (<s> ^operator <o> +) (<o> ^name op1 ^target <t>)}
+sp {aop1 (state <s> ^operator <o> ^count <c>) (<o> ^name op1 ^target <t>) (<t> ^val <v>)
+   --> (<s> ^count <c> - (+ <c> 1))  (write |op1 | <v> (crlf))}
+sp {tie (state <s> ^impasse << tie conflict >> ^superstate <ss> ^item <i> -^item {<j> > <i>})
+   --> (<ss> ^operator <i> >)}
+sp {done (state <s> ^superstate nil ^count >= 4) --> (write |done| (crlf)) (halt)}
+"""
+
+
+@pytest.mark.parametrize("text", [TOKEN_RETRACTION, COUNT_RETRACTION],
+                         ids=["token-retraction", "count-retraction"])
+def test_removed_wme_retracts_its_matches_in_token_order(text: str, tmp_path) -> None:
+    assert _retracted(_our_trace(text, 12, 5)) == _retracted(
+        _kernel_trace(text, 12, tmp_path, 5))
+
+
+def _asserted(trace: str) -> list[str]:
+    """The preferences asserted and the WMEs added, in order, with timetags."""
+    return [line.strip() for line in trace.splitlines()
+            if line.startswith("+ (") or line.startswith("=>WM:")]
+
+
+# sx then sy fire in one wave of the substate: the kernel asserts the last first, each
+# right after the justification of its results (justify3, sy, justify1, sx).
+RESULTS = """
+sp {top (state <s> ^superstate nil) --> (<s> ^operator <o> +) (<o> ^name go)}
+sp {sx (state <s> ^superstate <ss>) (<ss> ^operator.name go) --> (<ss> ^rx 1)}
+sp {sy (state <s> ^superstate <ss>) (<ss> ^operator.name go) --> (<ss> ^ry 1)}
+sp {fx (state <s> ^superstate nil ^rx 1) --> (<s> ^fx 1)}
+sp {fy (state <s> ^superstate nil ^ry 1) --> (<s> ^fy 1)}
+"""
+
+
+@pytest.mark.parametrize("text", [RESULTS, generated_agent(2)], ids=["results", "agent-2"])
+def test_results_follow_their_justifications(text: str, tmp_path) -> None:
+    """Agent 2: two snc matches the waterfall put off keep their places in the queue
+    (count 0's, the later made, fires first: justify5), and each firing's results come
+    right after its justification (justify7, snc of count 2, justify5, snc of count 0),
+    which gives (S1 ^count 1) timetag 40 and (S1 ^count 3) 39."""
+    assert _asserted(_our_trace(text, 15, 5)) == _asserted(
+        _kernel_trace(text, 15, tmp_path, 5))
