@@ -24,6 +24,13 @@ indifferent with and without numbers, best, worst, require, prohibit, reject) an
 ones, both selection policies and numeric-indifferent modes, phases that switch which
 rules propose, and substates for tie, conflict and constraint-failure impasses. Found
 this way: the order of joins one WME relinks.
+
+Matching agents: objects with typed values (ints, floats, strings, identifier-like
+constants) under a few attributes, elaborated by rules with predicates against constants
+and variables, attribute variables, paths, disjunctions, negations, conjunctive negations
+and joins between objects; operators that double values, replace them by strings, add
+halves or remove objects. Found this way: relational tests between values of different
+kinds, and where the kernel's reorderer moves a test on a later-bound variable.
 """
 
 from __future__ import annotations
@@ -330,6 +337,86 @@ def _impasse_rule(r: random.Random, kind: str) -> list[str]:
     return []
 
 
+VALUES = ["1", "2", "3", "1.5", "2.0", "|x|", "|y z|", "a", "b", "-1", "0"]
+RELATIONS = ["<", ">", "<=", ">=", "<>", "<=>", ""]
+ATTRIBUTES = ["p", "q", "r"]
+
+
+def matching_agent(seed: int) -> str:
+    """The rule file of one random matching agent."""
+    r = random.Random(seed)
+    count = r.randint(3, 6)
+    body = []
+    for i in range(count):
+        parts = [f"^{r.choice(ATTRIBUTES)} {r.choice(VALUES)}" for _ in range(r.randint(1, 3))]
+        if i and r.random() < 0.4:
+            parts.append(f"^next <x{i - 1}>")
+        body.append(f"(<x{i}> {' '.join(parts)})")
+    objects = " ".join(f"<x{i}>" for i in range(count))
+    lines = [
+        "sp {init (state <s> ^superstate nil -^stage) --> (<s> ^operator <o> + >)"
+        " (<o> ^name init)}",
+        f"sp {{init*a (state <s> ^operator.name init) --> (<s> ^stage 0 ^obj {objects})"
+        f" {' '.join(body)}}}",
+    ]
+    lines += [_matching_rule(r, k) for k in range(r.randint(2, 6))]
+    for k in range(r.randint(1, 3)):
+        lines += _matching_operator(r, k)
+    lines += [
+        "sp {tie (state <s> ^impasse << tie conflict >> ^superstate <ss> ^item <i>"
+        " -^item {<j> > <i>}) --> (<ss> ^operator <i> >)}",
+        "sp {snc (state <s> ^impasse no-change ^superstate <ss>) (<ss> ^stage <g>)"
+        " --> (<ss> ^stage (+ <g> 1) <g> -)}",
+        "sp {done (state <s> ^superstate nil ^stage >= 4) --> (write |done| (crlf)) (halt)}",
+    ]
+    return "indifferent-selection --first\n" + "\n".join(lines) + "\n"
+
+
+def _matching_rule(r: random.Random, k: int) -> str:
+    kind = r.randrange(8)
+    a1, a2 = r.choice(ATTRIBUTES), r.choice(ATTRIBUTES)
+    relation, value = r.choice(RELATIONS), r.choice(VALUES)
+    test = f"{{<v> {relation} {value}}}" if relation else "<v>"
+    head = f"sp {{e{k}x (state <s> ^obj <x>)"
+    if kind == 0:
+        return f"{head} (<x> ^{a1} {test}) --> (<s> ^found{k} <v>)}}"
+    if kind == 1:
+        return f"{head} (<x> ^<att> {test}) --> (<s> ^attr{k} <att>)}}"
+    if kind == 2:
+        return f"{head} (<x> ^next.{a1} <v>) --> (<x> ^prev{k} <v>)}}"
+    if kind == 3:
+        return (f"{head} (<x> ^{a1} <v> ^{a2} {{<w> <> <v>}})"
+                f" --> (<s> ^pairs{k} (concat <v> |-| <w>))}}")
+    if kind == 4:
+        return f"{head} -(<x> ^{a1} {value}) --> (<s> ^lacks{k} <x>)}}"
+    if kind == 5:
+        return f"{head} (<x> ^{a1} << {' '.join(r.sample(VALUES, 3))} >>) --> (<s> ^in{k} <x>)}}"
+    if kind == 6:
+        return (f"sp {{e{k}x (state <s> ^obj <x> ^obj {{<y> <> <x>}}) (<x> ^{a1} <v>)"
+                f" (<y> ^{a1} <v>) --> (<s> ^same{k} <v>)}}")
+    return (f"{head} (<x> ^{a1} <v>) -{{(<s> ^obj <y>) (<y> ^{a1} > <v>)}}"
+            f" --> (<s> ^top{k} <v>)}}")
+
+
+def _matching_operator(r: random.Random, k: int) -> list[str]:
+    attr = r.choice(ATTRIBUTES)
+    effect = r.choice([
+        f"(<x> ^{attr} <v> - (* <v> 2))",
+        f"(<x> ^{attr} <v> - |changed|)",
+        "(<s> ^obj <x> -)",
+        f"(<x> ^{attr} (+ <v> 0.5))",
+        f"(<x> ^{attr} (div 7 2) (mod 7 3) (abs -2) (int 2.7) (float 3))",
+    ])
+    return [
+        f"sp {{op{k}x (state <s> ^superstate nil ^stage <g> < 4 ^obj <x>)"
+        f" (<x> ^{attr} {{<v> > 0}}) --> (<s> ^operator <o> + =)"
+        f" (<o> ^name op{k}x ^x <x> ^v <v>)}}",
+        f"sp {{ap{k}x (state <s> ^operator <o> ^stage <g>) (<o> ^name op{k}x ^x <x> ^v <v>)"
+        f" (<x> ^{attr} <v>) --> (<s> ^stage (+ <g> 1) <g> -) {effect}"
+        f" (write |op{k} | <v> (crlf))}}",
+    ]
+
+
 def _agree(path, decisions: int) -> None:
     theirs = run_kernel(path, decisions=decisions)
     ours = run_ours(path, decisions=decisions)
@@ -360,4 +447,20 @@ def test_deep_agent_behaves_as_in_the_kernel(seed: int, tmp_path) -> None:
 def test_preference_agent_behaves_as_in_the_kernel(seed: int, tmp_path) -> None:
     path = tmp_path / "preferences.soar"
     path.write_text(preference_agent(seed))
+    _agree(path, 40)
+
+
+# Seeds whose firing or retraction order still differs from the kernel's (the operators
+# chosen then differ): see the note of issue 2.
+MATCHING_ORDER = {8, 21}
+
+
+@pytest.mark.parametrize(
+    "seed",
+    [pytest.param(seed, marks=pytest.mark.xfail(reason="firing order", strict=True))
+     if seed in MATCHING_ORDER else seed for seed in range(48)],
+)
+def test_matching_agent_behaves_as_in_the_kernel(seed: int, tmp_path) -> None:
+    path = tmp_path / "matching.soar"
+    path.write_text(matching_agent(seed))
     _agree(path, 40)
