@@ -1260,7 +1260,7 @@ class Agent:
         self._firings += 1
         info.firings += 1
         if self.trace_level >= 3:
-            self._emit(f"\nFiring {name}\n")
+            self._emit(f"\nFiring {symbol_text(name)}\n")  # |s*p| (measured)
         self._inst_of[match] = inst
         operators = (
             tested_operators(info, inst.wmes, goal.id)
@@ -1327,7 +1327,7 @@ class Agent:
         preferences it loses, in the order they were asserted (measured)."""
         gone = [pref for pref in reversed(inst.prefs) if pref.live and not pref.o_supported]
         if gone:
-            self._emit(f"\nRetracting {inst.name}\n")
+            self._emit(f"\nRetracting {symbol_text(inst.name)}\n")
             if self.trace_level >= 5:
                 self._emit_line("".join(trace_preference("-", pref) for pref in gone))
 

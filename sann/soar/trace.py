@@ -45,7 +45,7 @@ def trace_preference(sign: str, pref: object) -> str:
     where = f" [level {level}]" if level > 1 else ""
     return (
         f"{sign} ({symbol_text(p.id)} ^{symbol_text(p.attr)} {symbol_text(p.value)}"  # type: ignore[attr-defined]
-        f" {kind}{ref}{support}){where} ({inst.name})\n"
+        f" {kind}{ref}{support}){where} ({symbol_text(inst.name)})\n"
     )
 
 

@@ -359,3 +359,21 @@ def test_result_preferences_and_justifications_as_in_the_kernel(kernel, case: st
     got = ours(RESULTS[case], commands)[-1]
     assert _preference_lines(got) == _preference_lines(expected)
     assert "justify" in expected
+
+
+def test_rule_names_in_traces_are_printed_as_symbols(kernel) -> None:  # noqa: F811
+    """'Firing |s*p|', 'Retracting |a-b|', '(|o*1|)': a rule's name is printed like a
+    string symbol, in bars where the kernel could not read it back (three-character names
+    such as s*p; not ab*c or i*any)."""
+    names = ["s*p", "a-b", "o*1", "ab*c", "i*any", "top*work"]
+    rules = [
+        "sp {go (state <s> ^superstate nil -^stop) --> (<s> ^operator <o> + >) (<o> ^name go)}",
+        "sp {stop (state <s> ^operator.name go) --> (<s> ^stop yes)}",
+    ]
+    rules += [f"sp {{{name} (state <s> ^superstate nil -^stop) --> (<s> ^mark{k} yes)}}"
+              for k, name in enumerate(names)]
+    commands = ["watch 5", "run 2"]
+    expected = theirs(kernel, rules, commands)[-1]
+    got = ours(rules, commands)[-1]
+    assert got == expected
+    assert "Firing |s*p|" in expected and "Retracting |a-b|" in expected
