@@ -1019,6 +1019,10 @@ class Agent:
         kernel_key = self._kernel_key
         keys = [first + kernel_key(match, creator)[1:]
                 for first, match, creator in zip(firsts, new, creators, strict=True)]
+        if len(keys) == 2:  # the usual tie: two joins, settled without the token order
+            one, two = keys
+            if len(one) < 5 or len(two) < 5 or one[2] != two[2] or one[4] != two[4]:
+                return keys
         joins: dict[tuple, list[int]] = {}
         for k, key in enumerate(keys):
             if len(key) > 4:
