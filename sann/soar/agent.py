@@ -1222,17 +1222,18 @@ class Agent:
                     other = places[j]
                     if other[0] > place[0] or (other[0] == place[0] and other[5] < place[5]):
                         place = other
-        # When its join was made, or relinked (see KernelOrder): the entry of the newest WME
-        # before it, in the order the kernel's Rete took the WMEs in (_linked_rank).
-        # Joins relinked by one WME's entry go in the order it activated them: its
-        # (* ^attr *) memory before (* ^attr value), each's joins by path (measured).
+        # When its join was made, or relinked (see KernelOrder): the entry of the latest
+        # WME before it, in the order the kernel's Rete took the WMEs in (the negated
+        # _entry_rank). Joins relinked by one WME's entry go in the order it activated
+        # them: its (* ^attr *) memory before (* ^attr value), each's joins by path.
         born = place[2]
         starts = self._batch_starts
         linked: tuple = (bisect_left(starts, born), _LATEST)
         for j in place[1]:
             other_wme = wmes[j]
             if other_wme is not None and other_wme.timetag > born:
-                rank = (bisect_left(starts, other_wme.timetag), -other_wme.timetag)
+                batch, timetag = _entry_rank(other_wme, starts)
+                rank = (-batch, -timetag)
                 if rank > linked[:2]:
                     other = places[j]
                     linked = (*rank, other[0], other[3])
@@ -2456,18 +2457,12 @@ class Agent:
                 if _vkey(pref.value) == key and not pref.inst.is_justification]
 
     def _supporting_instantiations(self, wme: WME) -> list[Instantiation]:
+        """The instantiation a justification backtraces ``wme`` through: the one that
+        made it (kept after it retracted), else the first that supports it now."""
         source = self._sources.get(wme)
         if source is not None:
             return [] if source.is_justification else [source]
-        slot = self._slot(wme.id, wme.attr, create=False)
-        if slot is None:
-            return []
-        key = _vkey(wme.value)
-        for ptype in (ACCEPTABLE, REQUIRE):
-            for pref in slot.of_type(ptype):
-                if _vkey(pref.value) == key and not pref.inst.is_justification:
-                    return [pref.inst]
-        return []
+        return self._current_supports(wme)[:1]
 
     # ------------------------------------------------------------- input
 
@@ -2539,12 +2534,10 @@ def _with_justifications(fired: list[Instantiation],
     return insts
 
 
-def _entry_rank(wme: object, starts: list[int]) -> tuple[int, int]:
+def _entry_rank(wme: WME, starts: list[int]) -> tuple[int, int]:
     """When the kernel's Rete took ``wme`` in, as a sort key, latest first: batch after
     batch (``starts``: the timetag before each), a batch's WMEs newest first."""
-    if wme is None:
-        return (1, 0)
-    timetag = wme.timetag  # type: ignore[attr-defined]
+    timetag = wme.timetag
     return (-bisect_left(starts, timetag), timetag)
 
 

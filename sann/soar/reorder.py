@@ -465,16 +465,16 @@ def with_kernel_relations(production: Production, ages: dict[tuple[type, object]
     for position, kcond in enumerate(positive):
         cond = kcond.element
         assert isinstance(cond, Condition)
-        own = {name for _, test in _fields(cond) for name in _equalities(test)}
+        own = {name for _, test in _fields(cond) for name in _equality_names(test)}
         for field_name, test in _fields(cond):
-            equality = next(iter(_equalities(test)), None)
+            equality = next(iter(_equality_names(test)), None)
             for rel in _relationals(test):
                 var = rel.operand.name  # type: ignore[union-attr]
                 if equality is None or var in bound or var in own:
                     continue
                 target = next((k.element for k in positive[position + 1:]
                                if var in {n for _, t in _fields(k.element)  # type: ignore[arg-type]
-                                          for n in _equalities(t)}), None)
+                                          for n in _equality_names(t)}), None)
                 if target is None:
                     continue
                 moves.setdefault(id(cond), []).append((field_name, rel, None))
@@ -496,21 +496,13 @@ def _fields(cond: Condition) -> list[tuple[str, Test]]:
     return [(name, getattr(cond, name)) for name in _FIELDS]
 
 
-def _equalities(test: Test) -> list[str]:
-    if isinstance(test, Var):
-        return [test.name]
-    if isinstance(test, Conjunction):
-        return [t.name for t in test.tests if isinstance(t, Var)]
-    return []
-
-
 def _relationals(test: Test) -> list[Relational]:
     tests = test.tests if isinstance(test, Conjunction) else (test,)
     return [t for t in tests if isinstance(t, Relational) and isinstance(t.operand, Var)]
 
 
 def _field_of(cond: Condition, var: str) -> str:
-    return next(name for name, test in _fields(cond) if var in _equalities(test))
+    return next(name for name, test in _fields(cond) if var in _equality_names(test))
 
 
 def _moved(cond: Condition, changes: list[tuple[str, object, object]]) -> Condition:

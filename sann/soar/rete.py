@@ -113,8 +113,9 @@ def _const_order(mixed: bool, holds: Callable[[Symbol, Symbol], bool]
 #: ``<=`` hold and ``>`` and ``>=`` do not — so both ``abc < 5`` and ``5 < abc`` hold, as
 #: soar_sml shows (for a variable too: ``-{(<y> ^p > <v>)}`` with <v> 1.5 is not blocked
 #: by ^p |changed|, ``-{(<y> ^p < <v>)}`` is). The kernel's reorderer may move a test on a
-#: variable bound later into that variable's condition, inverted; such a test is run the
-#: other way round there (not modelled: see ``symbol_order_less`` for a total order).
+#: variable bound later into that variable's condition, inverted, and run it there on that
+#: WME's value: the agent hands the matcher its productions so arranged
+#: (``reorder.with_kernel_relations``).
 _RELATIONS: dict[str, Callable[[Symbol, Symbol], bool]] = {
     "<>": lambda a, b: not (a.__class__ is b.__class__ and a == b),
     "<": _const_order(True, symbol_order_less),
@@ -125,7 +126,6 @@ _RELATIONS: dict[str, Callable[[Symbol, Symbol], bool]] = {
     "@": lambda a, b: False,
     "!@": lambda a, b: True,
 }
-_CONST_RELATIONS = _RELATIONS
 
 
 # ---------------------------------------------------------------------------------------------
@@ -381,7 +381,7 @@ def _test_holds(test: Test, value: Symbol, bindings: dict[str, Symbol], final: b
     if isinstance(test, Relational):
         operand = test.operand
         if isinstance(operand, Const):
-            return _CONST_RELATIONS[test.op](value, operand.value)
+            return _RELATIONS[test.op](value, operand.value)
         if operand.name not in bindings:
             return not final
         return _RELATIONS[test.op](value, bindings[operand.name])
@@ -1638,7 +1638,7 @@ def _compile_alpha(specs: list[tuple]) -> Callable[[WME], bool] | None:
     if not specs:
         return None
     lines = ["def accept(w):"]
-    namespace: dict[str, object] = {"NUMBERS": _NUMBERS, "CONST": _CONST_RELATIONS}
+    namespace: dict[str, object] = {"NUMBERS": _NUMBERS}
     for n, spec in enumerate(specs):
         kind = spec[0]
         if kind == "state":
@@ -1655,7 +1655,7 @@ def _compile_alpha(specs: list[tuple]) -> Callable[[WME], bool] | None:
             lines.append(f"    if not (x.__class__ is c{n}.__class__ and x == c{n}): return False")
         elif kind == "rel":
             namespace[f"c{n}"] = spec[3][1]
-            namespace[f"r{n}"] = _CONST_RELATIONS[spec[2]]
+            namespace[f"r{n}"] = _RELATIONS[spec[2]]
             lines.append(f"    if not r{n}(x, c{n}): return False")
         else:  # disjunction of typed constants
             namespace[f"d{n}"] = frozenset(spec[2])

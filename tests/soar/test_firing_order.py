@@ -54,7 +54,7 @@ SHAPES = {
 }
 
 
-def kernel_events(text: str, decisions: int, tmp_path) -> list[str]:
+def _kernel_trace(text: str, decisions: int, tmp_path, level: int) -> str:
     path = tmp_path / "agent.soar"
     path.write_text(text)
     kernel = sml.Kernel.CreateKernelInCurrentThread(True, 0)
@@ -65,21 +65,29 @@ def kernel_events(text: str, decisions: int, tmp_path) -> list[str]:
             sml.smlEVENT_PRINT, lambda mid, ud, ag, msg: log.append(msg), None
         )
         agent.ExecuteCommandLine(f"source {path}")
-        agent.ExecuteCommandLine("watch 3")
+        agent.ExecuteCommandLine(f"watch {level}")
         log.clear()
         agent.ExecuteCommandLine(f"run {decisions}")
     finally:
         kernel.Shutdown()
-    return _events("".join(log))
+    return "".join(log)
 
 
-def our_events(text: str, decisions: int) -> list[str]:
+def _our_trace(text: str, decisions: int, level: int) -> str:
     out = io.StringIO()
     agent = Agent(out=out)
     agent.load(text)
-    agent.trace(3)
+    agent.trace(level)
     agent.run(decisions)
-    return _events(out.getvalue())
+    return out.getvalue()
+
+
+def kernel_events(text: str, decisions: int, tmp_path) -> list[str]:
+    return _events(_kernel_trace(text, decisions, tmp_path, 3))
+
+
+def our_events(text: str, decisions: int) -> list[str]:
+    return _events(_our_trace(text, decisions, 3))
 
 
 def _events(trace: str) -> list[str]:
@@ -107,34 +115,6 @@ def test_generated_agent_fires_in_kernel_order(seed: int, tmp_path) -> None:
     removed WMEs first, then those a new WME blocked, each oldest match first."""
     text = generated_agent(seed)
     assert our_events(text, 3) == kernel_events(text, 3, tmp_path)
-
-
-def _kernel_trace(text: str, decisions: int, tmp_path, level: int) -> str:
-    path = tmp_path / "agent.soar"
-    path.write_text(text)
-    kernel = sml.Kernel.CreateKernelInCurrentThread(True, 0)
-    try:
-        agent = kernel.CreateAgent("order")
-        log: list[str] = []
-        agent.RegisterForPrintEvent(
-            sml.smlEVENT_PRINT, lambda mid, ud, ag, msg: log.append(msg), None
-        )
-        agent.ExecuteCommandLine(f"source {path}")
-        agent.ExecuteCommandLine(f"watch {level}")
-        log.clear()
-        agent.ExecuteCommandLine(f"run {decisions}")
-    finally:
-        kernel.Shutdown()
-    return "".join(log)
-
-
-def _our_trace(text: str, decisions: int, level: int) -> str:
-    out = io.StringIO()
-    agent = Agent(out=out)
-    agent.load(text)
-    agent.trace(level)
-    agent.run(decisions)
-    return out.getvalue()
 
 
 def _retracted(trace: str) -> list[str]:
