@@ -22,7 +22,7 @@ import weakref
 from bisect import bisect_left
 from collections.abc import Iterable, Iterator
 from pathlib import Path
-from typing import TextIO
+from typing import TextIO, cast
 
 from . import decide as dec
 from .errors import SoarError, SoarRuntimeError
@@ -88,13 +88,17 @@ def _default_matcher() -> type:
     return Rete
 
 
-def _vkey(value: Symbol) -> object:
+def _vkey(value: Symbol | None) -> object:
     """Dictionary key of a value: ``1`` and ``1.0`` are different Soar symbols."""
     return value if type(value) is not float else (float, value)
 
 
 class Agent:
     """A Soar agent. See the module docstring for the cycle; the README for the API."""
+
+    # declared here: assigned first outside ``__init__`` (mypyc takes the first type)
+    _input_handle: InputHandle | None
+    _traced_adds: list[WME]
 
     def __init__(
         self,
@@ -473,7 +477,7 @@ class Agent:
         """Fresh working memory and counters, then the top state as the kernel makes it."""
         self._ids = IdentifierFactory()
         self._epoch = getattr(self, "_epoch", 0) + 1
-        self._input_handle: InputHandle | None = None
+        self._input_handle = None
         self._timetag = 0
         self._wm: dict[int, WME] = {}
         self._slots: dict[Identifier, dict[object, Slot]] = {}
@@ -502,7 +506,7 @@ class Agent:
         # every earlier _batch_start that began a batch of new WMEs (see _entry_rank)
         self._batch_starts: list[int] = []
         # WMEs added and removed since the last trace of working-memory changes (watch 4+)
-        self._traced_adds: list[WME] = []
+        self._traced_adds = []
         self._traced_removes: list[WME] = []
         # removed goals' link WMEs and their children: traced after the batch's others
         self._traced_late: list[WME] = []
@@ -999,6 +1003,8 @@ class Agent:
         creators = [creator(match, start) for match in new]
         firsts = [(0, tt) if tt <= start else (1, -tt) for tt, _ in creators]
         if len(new) == 2:  # the usual case, without sorting
+            one: tuple
+            two: tuple
             one, two = firsts
             if one == two:
                 one, two = self._tied_keys(firsts, new, creators)
@@ -1143,9 +1149,10 @@ class Agent:
             else:
                 wmes = match.wmes
                 ident = match_goal(wmes)
-                goal = self._goals.get(ident) if ident is not None else None
-                if goal is None or not goal.alive:
+                maybe = self._goals.get(ident) if ident is not None else None
+                if maybe is None or not maybe.alive:
                     continue
+                goal = maybe  # (mypyc checks the declared Goal: no None here)
             support = is_o_supported(info, wmes, goal.id, match)
             if support is MIXED:
                 self._warn_mixed_support(info.production.name)
@@ -1258,10 +1265,7 @@ class Agent:
     ) -> Instantiation:
         """Fire a match (``o_support``: it was queued as an o-assertion)."""
         name = info.production.name
-        inst = _new(Instantiation)  # Instantiation.__init__, inline (see _add_wme)
-        inst.name, inst.match, inst.goal, inst.wmes = name, match, goal, match.wmes  # type: ignore[attr-defined]
-        inst.prefs, inst.o_support, inst.is_justification = [], o_support, False
-        inst.grounds, inst.retracted = (), False
+        inst = Instantiation(name, match, goal, match.wmes, o_support)  # type: ignore[attr-defined]
         self._firings += 1
         info.firings += 1
         if self.trace_level >= 3:
@@ -1274,7 +1278,9 @@ class Agent:
         )
         bindings = match.bindings  # type: ignore[attr-defined]
         program = info.program
-        self.firing = inst  # for deep-copy, which may replace it by its waiting copies
+        # for deep-copy, which may replace it by its waiting copies (cast: not narrowed to
+        # Instantiation, which mypyc would check when reading it back)
+        self.firing = cast(object, inst)
         if program is not None:
             program(self, bindings, inst, o_support, operators)
         else:
@@ -1686,7 +1692,7 @@ class Agent:
                     return
                 # Fast path: one acceptable preference and nothing else.
                 value = acceptable[0].value
-                key = value if type(value) is not float else (float, value)
+                key: object = value if type(value) is not float else (float, value)
                 if key in wmes:
                     if len(wmes) > 1:
                         for other in [k for k in wmes if k != key or type(k) is not type(key)]:
@@ -1730,6 +1736,7 @@ class Agent:
             p.value if type(p.value) is not float else (float, p.value) for p in acceptable
         }
         gone = [key for key in wmes if key not in present]
+        key: object
         for key in gone:
             removes.append(wmes.pop(key))
         missing = len(present) - len(wmes)
@@ -1760,7 +1767,7 @@ class Agent:
         for ptype in (REQUIRE, ACCEPTABLE):
             for pref in prefs.get(ptype, ()):
                 value = pref.value
-                key = value if type(value) is not float else (float, value)
+                key: object = value if type(value) is not float else (float, value)
                 if key not in wanted:
                     wanted[key] = value
         current = slot.acceptable_wmes

@@ -85,7 +85,7 @@ def run_preference_semantics(
 
 def _push_front_unique(values: list[Symbol]) -> list[Symbol]:
     """The kernel builds candidate lists by pushing each new value on the front."""
-    seen: set[int] = set()
+    seen: set[object] = set()
     out: list[Symbol] = []
     for value in values:
         key = _key(value)
@@ -96,7 +96,7 @@ def _push_front_unique(values: list[Symbol]) -> list[Symbol]:
     return out
 
 
-def _key(value: Symbol) -> object:
+def _key(value: Symbol | None) -> object:
     """Symbols compare by type and value (``1`` and ``1.0`` are different symbols);
     identifiers by identity."""
     return id(value) if type(value) is Identifier else (type(value), value)
@@ -195,7 +195,7 @@ def numeric_values(slot: Slot, candidates: list[Symbol], mode: str = "sum") -> l
     counts: dict[object, int] = {}
     for pref in slot.of_type(NUMERIC_INDIFFERENT):
         key = _key(pref.value)
-        totals[key] = totals.get(key, 0.0) + float(pref.referent)
+        totals[key] = totals.get(key, 0.0) + float(pref.referent)  # type: ignore[arg-type]
         counts[key] = counts.get(key, 0) + 1
     values = []
     for cand in candidates:

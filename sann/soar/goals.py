@@ -52,8 +52,8 @@ class Goal:
         #: ``^item``/``^non-numeric`` WMEs by (attribute, value key).
         self.items: dict[tuple[str, object], WME] = {}
         self.counts: dict[str, WME] = {}
-        self.pending_i: dict[object, ProductionInfo] = {}
-        self.pending_o: dict[object, ProductionInfo] = {}
+        self.pending_i: dict[object, ProductionInfo | None] = {}  # None: a justification's match
+        self.pending_o: dict[object, ProductionInfo | None] = {}
         self.retractions: list[Instantiation] = []
         #: Instantiations whose preferences die with this (sub)state, oldest first (a dict,
         #: not a set: removing the state walks them in an order that does not depend on

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 from .codegen import define
 from .errors import SoarError, SoarRuntimeError
 from .memory import WME, Identifier, Symbol
-from .preferences import Preference, preference_type
+from .preferences import NATIVE, Preference, preference_type
 from .production import CallAction, Const, FuncCall, MakeAction, Production, RhsValue, Var
 from .rhs import FUNCTIONS, kernel_shown
 
@@ -307,6 +307,13 @@ class _RhsCompiler:
         if action.referent is not None:
             referent = self._value(action.referent, out, ind)
             ptype = f"preference_type({ptype}, {referent})"
+        if NATIVE:  # mypyc's native Preference: its constructor is C, object.__new__ refused
+            out += [
+                f"{ind}p = Preference({ptype}, {ident}, {attr}, {value}, {referent}, inst)",
+                f"{ind}p.o_supported = o_support and {ident} not in operators",
+                f"{ind}append(p)",
+            ]
+            return
         out += [
             # Preference.__init__, inline: CPython 3.11 runs a class's Python __init__
             # through a C call into a new interpreter frame

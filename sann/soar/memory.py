@@ -10,8 +10,17 @@ from __future__ import annotations
 import math
 import re
 from collections import defaultdict
+from collections.abc import Callable
+
+try:
+    from mypy_extensions import mypyc_attr
+except ImportError:  # interpreted, without the package: the decorator marks nothing
+
+    def mypyc_attr(*args: object, **kwargs: object) -> Callable[[type], type]:  # type: ignore[no-redef]
+        return lambda cls: cls
 
 
+@mypyc_attr(native_class=False)  # weak references, and read by generated code
 class Identifier:
     """A Soar identifier. ``level`` is the goal-stack depth of a state (1 = top), ``None``
     for identifiers that are not states; substate links and GDS live in the agent."""
@@ -34,7 +43,8 @@ class Identifier:
     def __repr__(self) -> str:
         return self.name
 
-    __str__ = __repr__
+    def __str__(self) -> str:  # not ``__str__ = __repr__``: mypyc's non-native classes
+        return f"{self.letter}{self.number}"
 
 
 Symbol = Identifier | str | int | float
@@ -63,6 +73,7 @@ class IdentifierFactory:
         self._counters.clear()
 
 
+@mypyc_attr(native_class=False)  # weak references, and read by generated code
 class WME:
     """``(id ^attr value)`` with a timetag. ``acceptable`` marks an acceptable operator
     preference shown in working memory as ``(S1 ^operator O1 +)``."""

@@ -20,6 +20,10 @@ from .memory import WME, Identifier, Symbol
 if TYPE_CHECKING:
     from .instantiation import Instantiation
 
+#: Whether this module runs compiled by mypyc: its classes are then native, their objects made
+#: by calling the class (``object.__new__`` refuses them).
+NATIVE = not __file__.endswith(".py")
+
 ACCEPTABLE = "+"
 REJECT = "-"
 REQUIRE = "!"
@@ -79,7 +83,7 @@ class Preference:
         self.attr = attr
         self.value = value
         self.referent = referent
-        self.inst = inst
+        self.inst: Instantiation | None = inst
         self.o_supported = False
         self.slot: Slot | None = None
         self.live = False
@@ -113,9 +117,9 @@ class Slot:
         self.is_context = is_context
         self.prefs: dict[str, list[Preference]] = {}
         #: value -> WME (non-operator slots; for the operator slot: the selected operator).
-        self.wmes: dict[Symbol, WME] = {}
+        self.wmes: dict[object, WME] = {}  # keyed by `agent._vkey` (floats in a tuple)
         #: value -> ``(id ^operator value +)`` WME (operator slots only).
-        self.acceptable_wmes: dict[Symbol, WME] = {}
+        self.acceptable_wmes: dict[object, WME] = {}
         self.changed = False
         #: A context slot: a preference came or went since the slot was last decided
         #: (the kernel's per-slot changed flag; a state no-change stands while it is unset).

@@ -33,12 +33,13 @@ Matching follows the real Soar 9.6 kernel (checked with ``soar_sml``):
 from __future__ import annotations
 
 import re
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from operator import attrgetter
+from typing import Any
 
 from sann.soar.codegen import define
 from sann.soar.errors import SoarSemanticError
-from sann.soar.memory import WME, Identifier, Symbol
+from sann.soar.memory import WME, Identifier, Symbol, mypyc_attr
 from sann.soar.production import (
     Condition,
     ConditionElement,
@@ -133,6 +134,7 @@ _RELATIONS: dict[str, Callable[[Symbol, Symbol], bool]] = {
 # ---------------------------------------------------------------------------------------------
 
 
+@mypyc_attr(native_class=False)  # made and read by generated code
 class Match:
     """One instantiation of a production.
 
@@ -606,6 +608,7 @@ def _index_remove(index: dict, value: object, item: object) -> None:
         del index[key]
 
 
+@mypyc_attr(native_class=False)  # made and read by generated code
 class _Token:
     """A partial match: ``parent`` token, ``wme`` (or the tuple of a run node's WMEs),
     ``vals`` the tuple of variable values bound so far, ``node`` the beta node that owns it
@@ -620,6 +623,12 @@ class _Token:
     more than the six stores."""
 
     __slots__ = ("parent", "wme", "vals", "node", "children", "extra")
+    parent: Any
+    wme: Any
+    vals: Any
+    node: Any
+    children: Any
+    extra: Any
 
 
 _new = object.__new__
@@ -751,6 +760,7 @@ class _AlphaMemory:
             _index_add(index, _GET[field](wme), wme)
 
 
+@mypyc_attr(native_class=False)  # methods and generated functions in the same places
 class _Node:
     """A beta node with its memory of (active) output tokens and hash indices on it."""
 
@@ -808,7 +818,10 @@ class _Node:
                 if not bucket:
                     del index[key]
 
-    unstore = forget
+    def unstore(self, tok: _Token) -> None:
+        """`_Node.forget` whatever the subclass's ``forget`` (not ``unstore = forget``: mypyc
+        fails on that in a non-native class)."""
+        _Node.forget(self, tok)
 
     def all_tokens(self) -> list[_Token]:
         return list(self.tokens)
@@ -821,6 +834,7 @@ class _Node:
         raise AssertionError("the root node is never activated")
 
 
+@mypyc_attr(native_class=False)  # methods and generated functions in the same places
 class _JoinNode(_Node):
     """Joins parent tokens with the WMEs of an alpha memory, hashed on one equality test.
 
@@ -876,25 +890,13 @@ class _JoinNode(_Node):
         grow = ("vals" if self.extend is None else "vals + (wme.value,)"
                 if self.extend is _EXTEND_VALUE else "E(vals, wme)")
 
-        def body(register: str) -> list[str]:
-            """Test the pair, make the token, register, index and pass it on."""
-            lines = [] if self.check is None else _check_lines(
-                self.check.specs, "vals", "wme", "continue", "")  # type: ignore[attr-defined]
-            lines += [f"new = {grow}", *_token_lines("", "t", "wme", "new"), "s = t.children",
-                      "if s is None: t.children = {tok: None}", "else: s[tok] = None", register,
-                      "T[tok] = None"]
-            for k, (pos, index) in enumerate(self.index_list):
-                namespace[f"I{k}"] = index
-                lines += _filing_lines(f"I{k}", f"new[{pos}]", "tok", "", True)
-            lines += ["for child in CH:", "    child.left_activate(tok)"]
-            return ["        " + line for line in lines]
-
         left = ["def left_activate(t):", "    vals = t.vals"]
         if hashed:
             left += [f"    key = vals[{self.pos}]",
                      "    if key.__class__ is float: key = (FLOAT, key)",
                      "    bucket = AB.get(key)", "    if bucket is None: return"]
-        left += [f"    for wme in {'bucket' if hashed else 'AB'}:"] + body("R[wme][1][tok] = None")
+        left += [f"    for wme in {'bucket' if hashed else 'AB'}:"] + _join_body(
+            self, namespace, grow, "R[wme][1][tok] = None")
         right = ["def right_activate(wme):"]
         if hashed:
             right.append(f"    key = wme.{self.field}")
@@ -902,12 +904,29 @@ class _JoinNode(_Node):
                 right.append("    if key.__class__ is float: key = (FLOAT, key)")
             right += ["    bucket = PB.get(key)", "    if bucket is None: return"]
         right += ["    built = R[wme][1]", f"    for t in {'bucket' if hashed else 'PB'}:",
-                  "        vals = t.vals"] + body("built[tok] = None")
+                  "        vals = t.vals"] + _join_body(self, namespace, grow, "built[tok] = None")
         self.left_activate = define(left, namespace, "left_activate")
         self.right_activate = define(right, namespace, "right_activate")
         self.amem._relink()  # the alpha memory calls the compiled right_activate from now on
 
 
+def _join_body(node: _JoinNode, namespace: dict[str, object], grow: str,
+               register: str) -> list[str]:
+    """Test the pair, make the token, register, index and pass it on (a function of its
+    own, not nested in ``_JoinNode._compile``: mypyc fails on a closure there)."""
+    lines = [] if node.check is None else _check_lines(
+        node.check.specs, "vals", "wme", "continue", "")  # type: ignore[attr-defined]
+    lines += [f"new = {grow}", *_token_lines("", "t", "wme", "new"), "s = t.children",
+              "if s is None: t.children = {tok: None}", "else: s[tok] = None", register,
+              "T[tok] = None"]
+    for k, (pos, index) in enumerate(node.index_list):
+        namespace[f"I{k}"] = index
+        lines += _filing_lines(f"I{k}", f"new[{pos}]", "tok", "", True)
+    lines += ["for child in CH:", "    child.left_activate(tok)"]
+    return ["        " + line for line in lines]
+
+
+@mypyc_attr(native_class=False)  # methods and generated functions in the same places
 class _NegativeNode(_Node):
     """Passes a parent token on while no WME of its alpha memory joins with it."""
 
@@ -943,7 +962,7 @@ class _NegativeNode(_Node):
             bucket = self.amem_index.get((_FLOAT, value) if value.__class__ is float else value)
         else:
             bucket = self.amem.wmes
-        blockers = None
+        blockers: dict[WME, None] | None = None
         if bucket:
             check = self.check
             for wme in bucket:
@@ -1036,6 +1055,7 @@ def _block(record: list, tok: _Token) -> None:
         blocked[tok] = None
 
 
+@mypyc_attr(native_class=False)  # methods and generated functions in the same places
 class _NCCNode(_Node):
     """Conjunctive negation: passes a parent token on while its subnetwork has no result
     for it.  Results arrive through the partner node at the bottom of the subnetwork."""
@@ -1088,6 +1108,7 @@ class _NCCNode(_Node):
             result.extra = None
 
 
+@mypyc_attr(native_class=False)  # methods and generated functions in the same places
 class _PartnerNode(_Node):
     """Bottom of an NCC subnetwork: each token reaching it is a result for the NCC token
     ``levels`` levels up."""
@@ -1188,6 +1209,7 @@ def _compile_query(levels: list[tuple], seed: int,
     return define(lines, namespace, "solve")
 
 
+@mypyc_attr(native_class=False)  # methods and generated functions in the same places
 class _QueryNCCNode(_Node):
     """Conjunctive negation answered by a query over the alpha memories instead of a
     subnetwork of tokens.
@@ -1463,6 +1485,7 @@ def _compile_run(node: _RunNode, seed: int) -> Callable:
     return define(lines, namespace, "make" if seed < 0 else "right_activate")
 
 
+@mypyc_attr(native_class=False)  # methods and generated functions in the same places
 class _RunNode(_Node):
     """Consecutive positive conditions that test only values the parent token already has,
     joined as one node: ``(<c> ^zmax > <zl>)`` filters after ``<c>`` and ``<zl>`` are bound,
@@ -1525,6 +1548,7 @@ class _RunNode(_Node):
         return self.makers[self.amems.index(amem) + 1]
 
 
+@mypyc_attr(native_class=False)  # methods and generated functions in the same places
 class _ProductionNode(_Node):
     """Bottom of a production: each token is a Match."""
 
@@ -1669,7 +1693,7 @@ _ORDER_OPS = {"<": "<", ">": ">", "<=": "<=", ">=": ">="}
 _CHECK_NAMES: dict[str, object] = {"NUMBERS": _NUMBERS, "RELATIONS": _RELATIONS}
 
 
-def _check_lines(specs: list[BetaSpec], vals: str, w: str, fail: str, pad: str,
+def _check_lines(specs: Sequence[BetaSpec], vals: str, w: str, fail: str, pad: str,
                  value: Callable[[int], str] | None = None) -> list[str]:
     """Generated code testing every beta test of a join on the values ``vals`` and the WME
     ``w``, running ``fail`` (``return False``, ``continue``) at the first that does not
@@ -1677,8 +1701,7 @@ def _check_lines(specs: list[BetaSpec], vals: str, w: str, fail: str, pad: str,
     pair costs more than the tests themselves.  ``value(pos)`` may name a value position
     otherwise than ``vals[pos]``."""
     if value is None:
-        def value(pos: int) -> str:
-            return f"{vals}[{pos}]"
+        value = f"{vals}[{{}}]".format  # not a nested def: mypyc fails on one rebinding a parameter
     lines = []
     for n, ((lk, la), op, (rk, ra)) in enumerate(specs):
         left = f"{w}.{la}" if lk == "w" else value(la)  # type: ignore[arg-type]
@@ -2012,7 +2035,7 @@ class Rete:
         self._pnodes: dict[str, _ProductionNode] = {}
         self._productions: dict[str, Production] = {}  # in the order added
         self._pending: list[Production] = []  # added, network not built yet (see _flush)
-        self._volatile: set[object] = {"operator"}  # attributes rules remove
+        self._removed_attrs: set[object] = {"operator"}  # attributes rules remove
         self._stale: set[str] = set()  # built before an attribute they check became volatile
         self._amems: dict[tuple, _AlphaMemory] = {}
         self._alpha_index: dict[tuple, list[_AlphaMemory]] = {}
@@ -2037,9 +2060,9 @@ class Rete:
         for action in production.actions:
             if (isinstance(action, MakeAction) and action.preference == "-"
                     and isinstance(action.attr, Const)
-                    and action.attr.value not in self._volatile):
+                    and action.attr.value not in self._removed_attrs):
                 attr = action.attr.value
-                self._volatile.add(attr)
+                self._removed_attrs.add(attr)
                 self._stale.update(name for name, pnode in self._pnodes.items()
                                    if attr in _const_attributes(pnode.production.conditions))
 
@@ -2313,7 +2336,7 @@ class Rete:
         """Build the nodes of ``elements`` below ``parent``; return the bottom node and the
         written indices matched at each token level.  ``runs``: join consecutive independent
         conditions as one node (not inside an NCC subnetwork, whose partner counts levels)."""
-        order = _join_order(elements, var_pos, scope, singletons, self._volatile)
+        order = _join_order(elements, var_pos, scope, singletons, self._removed_attrs)
         deferred: list[tuple[int, str, str]] = []
         node = parent
         levels: list[tuple[int, ...]] = []
@@ -2351,7 +2374,7 @@ class Rete:
             levels.append((index,))
             check = _compile_check(plan.beta)
             if element.negated:
-                key = ("neg", id(amem), plan.index, tuple(plan.beta))
+                key: tuple = ("neg", id(amem), plan.index, tuple(plan.beta))
                 node = self._child(node, key, lambda p, k, a=amem, pl=plan, c=check:
                                    _NegativeNode(self, p, k, a, pl.index, c), amem)
             else:
@@ -2370,7 +2393,7 @@ class Rete:
         if len(run) == 1:
             _, plan, amem = run[0]
             fields = tuple(plan.new_fields)
-            key = ("join", id(amem), plan.index, tuple(plan.beta), fields)
+            key: tuple = ("join", id(amem), plan.index, tuple(plan.beta), fields)
             return self._child(parent, key, lambda p, k: _JoinNode(
                 self, p, k, amem, plan.index, _compile_check(plan.beta), _extender(fields)),
                 amem)
@@ -2433,7 +2456,7 @@ class Rete:
                          singletons: set[str], states: set[str]) -> _Node:
         """Plan the inner conditions as for a subnetwork, but keep them as the levels of a
         query (see :class:`_QueryNCCNode`)."""
-        order = _join_order(ncc.conditions, var_pos, scope, singletons, self._volatile)
+        order = _join_order(ncc.conditions, var_pos, scope, singletons, self._removed_attrs)
         deferred: list[tuple[int, str, str]] = []
         levels: list[tuple] = []
         shape: list[tuple] = []
@@ -2453,7 +2476,8 @@ class Rete:
             else:
                 pos, field = plan.index
                 getter, hashed = _GET[field], amem.index(field)
-            equalities = [] if plan.index is None else [(plan.index[1], plan.index[0])]
+            equalities: list[tuple[Any, Any]] = (
+                [] if plan.index is None else [(plan.index[1], plan.index[0])])
             equalities += [(left[1], right[1]) for left, op, right in plan.beta
                            if op == "=" and left[0] == "w" and right[0] == "v"]
             levels.append((amem.wmes, hashed, pos, getter, _compile_check(plan.beta),
@@ -2606,7 +2630,7 @@ class KernelOrder:
     def __init__(self) -> None:
         from sann.soar import reorder
 
-        self._reorder = reorder
+        self._reorder: Any = reorder  # a module (mypyc: an attribute of module type fails)
         self._ages: dict[tuple[type, object], int] = {
             (str, s): i for i, s in enumerate(reorder._PREDEFINED)}
         self._serial = 0
