@@ -4,8 +4,11 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 BOOK_HTML := book/_build/html/index.html
+# The engine's modules that mypyc compiles (setup.py; sann/soar/compiled.py says which and why).
+ENGINE := $(patsubst %,sann/soar/%.py,memory rete preferences instantiation decide goals agent)
+COMPILED := sann/soar/_engine.sha256
 
-.PHONY: book test lab lint bench clean
+.PHONY: book test engine lab lint bench clean
 
 $(STAMP): environment.txt pyproject.toml
 	test -x $(PY) || python3.11 -m venv $(VENV) || python3 -m venv $(VENV)
@@ -15,7 +18,17 @@ $(STAMP): environment.txt pyproject.toml
 	$(PY) -c "import sys, torch; v = torch.__version__; sys.exit(0 if v.endswith('+cpu') else f'torch {v} is not the +cpu build: pip pulled a CUDA build')"
 	touch $@
 
-book: $(STAMP)
+# The compiled engine: about two minutes of gcc, redone when an engine module changes. A failed
+# build leaves no extension module behind (the engine then runs from its sources, slower).
+$(COMPILED): $(STAMP) $(ENGINE) setup.py sann/soar/compiled.py
+	rm -rf build $(COMPILED) sann/soar/*.so
+	$(PY) setup.py --quiet build_ext --inplace > build.log 2>&1 \
+	  || { rm -f sann/soar/*.so; tail -30 build.log; echo "compiling the engine failed (build.log)"; exit 1; }
+	rm -rf build build.log
+
+engine: $(COMPILED)
+
+book: $(STAMP) $(COMPILED)
 	rm -rf book/_build/html
 	$(VENV)/bin/sphinx-build -W --keep-going -b html book book/_build/html
 	@echo "The book is at $(abspath $(BOOK_HTML))"
@@ -24,7 +37,7 @@ book: $(STAMP)
 /usr/bin/chromium:
 	apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium
 
-test: $(STAMP) /usr/bin/chromium
+test: $(STAMP) $(COMPILED) /usr/bin/chromium
 	$(PY) -m pytest -n 2 --dist loadgroup --durations=10 tests
 
 lab: $(STAMP)
@@ -33,10 +46,10 @@ lab: $(STAMP)
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .
 
-bench: $(STAMP)
+bench: $(STAMP) $(COMPILED)
 	$(PY) benchmarks/engine.py
 	$(PY) benchmarks/blocks.py
 	$(PY) benchmarks/vision.py
 
 clean:
-	rm -rf book/_build .sann-cache
+	rm -rf book/_build .sann-cache build build.log $(COMPILED) sann/soar/*.so

@@ -10,14 +10,8 @@ from __future__ import annotations
 import math
 import re
 from collections import defaultdict
-from collections.abc import Callable
 
-try:
-    from mypy_extensions import mypyc_attr
-except ImportError:  # interpreted, without the package: the decorator marks nothing
-
-    def mypyc_attr(*args: object, **kwargs: object) -> Callable[[type], type]:  # type: ignore[no-redef]
-        return lambda cls: cls
+from mypy_extensions import mypyc_attr
 
 
 @mypyc_attr(native_class=False)  # weak references, and read by generated code

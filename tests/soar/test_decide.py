@@ -7,6 +7,7 @@ import random
 import pytest
 
 from sann.soar import decide as dec
+from sann.soar.goals import Goal
 from sann.soar.instantiation import Instantiation
 from sann.soar.memory import Identifier
 from sann.soar.preferences import Preference, Slot, preference_type
@@ -14,16 +15,11 @@ from sann.soar.preferences import Preference, Slot, preference_type
 S1 = Identifier("S", 1, level=1)
 
 
-class _Goal:
-    id = S1
-    level = 1
-
-
 def slot_with(*prefs: tuple) -> tuple[Slot, dict[str, Identifier]]:
     """``("a", "+")``, ``("a", ">", "b")``, ``("a", "=", 0.5)`` ... on S1's operator slot."""
     slot = Slot(S1, "operator", True)
     ops: dict[str, Identifier] = {}
-    inst = Instantiation("test", None, _Goal(), (), False)  # type: ignore[arg-type]
+    inst = Instantiation("test", None, Goal(S1, None, slot), (), False)
     for spec in prefs:
         value = ops.setdefault(spec[0], Identifier("O", len(ops) + 1))
         referent = None
@@ -138,7 +134,7 @@ def test_numeric_values_sum_or_average() -> None:
 
 def test_non_operator_slot_keeps_all_unrejected_values() -> None:
     slot = Slot(S1, "color", False)
-    inst = Instantiation("t", None, _Goal(), (), False)  # type: ignore[arg-type]
+    inst = Instantiation("t", None, Goal(S1, None, Slot(S1, "operator", True)), (), False)
     for value, kind in (("red", "+"), ("blue", "+"), ("red", "-")):
         slot.add(Preference(kind, S1, "color", value, None, inst))
     assert dec.run_preference_semantics(slot, None) == (dec.NONE, ["blue"])
