@@ -81,10 +81,14 @@ def symbol_ages(productions: Iterable[Production]) -> dict[tuple[type, object], 
 
 def _constants(production: Production) -> Iterator[object]:
     yield production.name
-    for element in production.conditions:
-        yield from _element_constants(element)
+    yield from _condition_constants(production)
     for action in production.actions:
         yield from _action_constants(action)
+
+
+def _condition_constants(production: Production) -> Iterator[object]:
+    for element in production.conditions:
+        yield from _element_constants(element)
 
 
 def _element_constants(element: ConditionElement) -> Iterator[object]:
@@ -163,7 +167,37 @@ class _Namer:
 def kernel_conditions(production: Production, ages: dict[tuple[type, object], int],
                       multi: dict[str, int]) -> list[KCond]:
     """The production's conditions in the kernel's order, rewritten as the kernel prints
-    them (see the module docstring)."""
+    them (see the module docstring). The order depends only on the production, the ages
+    of the constants its conditions test and the ``multi-attributes`` counts, so it is
+    worked out once per distinct triple: loading a rule asks twice (its place in the
+    kernel's node tree, the relational tests the kernel moves), and every agent loading
+    the same rules asks again. The list is shared: callers only read it."""
+    keys = [(type(value), value) for value in _condition_constants(production)]
+    missing = len(ages)  # what _age gives a constant not yet aged
+    known = tuple(ages.get(key, missing) for key in keys)
+    multi_counts = tuple(sorted(multi.items()))
+    # By identity: equal productions are not interchangeable (the KConds point at their
+    # own condition objects, and 1 == 1.0 for dataclass equality).
+    cache_key = (id(production), known, multi_counts)
+    hit = _ORDERS.get(cache_key)
+    if hit is not None and hit[0] is production:
+        return hit[1]
+    if len(_ORDERS) >= _ORDERS_SIZE:
+        _ORDERS.clear()
+    ordered = _ordered_conditions(production, dict(zip(keys, known, strict=True)), multi)
+    _ORDERS[cache_key] = (production, ordered)
+    return ordered
+
+
+_ORDERS: dict[tuple[int, tuple[int, ...], tuple[tuple[str, int], ...]],
+              tuple[Production, list[KCond]]] = {}
+_ORDERS_SIZE = 4096
+
+
+def _ordered_conditions(production: Production, ages: dict[tuple[type, object], int],
+                        multi: dict[str, int]) -> list[KCond]:
+    """``kernel_conditions`` with the ages of the conditions' constants: the only ages
+    ``_canonical`` reads."""
     namer = _Namer()
     conds = [_kcond(e, i, namer) for i, e in enumerate(production.conditions)]
     roots = _roots(production.conditions)
@@ -446,10 +480,6 @@ def positive_order(ordered: list[KCond]) -> list[int]:
     return [k.index for k in ordered if not k.negated]
 
 
-__all__ = ["KCond", "format_kcond", "kernel_conditions", "positive_order", "symbol_ages"]
-
-
-
 def with_kernel_relations(production: Production, ages: dict[tuple[type, object], int]
                           ) -> Production:
     """``production`` with each relational test on a variable that the kernel's order
@@ -517,3 +547,7 @@ def _moved(cond: Condition, changes: list[tuple[str, object, object]]) -> Condit
             tests.append(added)
         fields[name] = tests[0] if len(tests) == 1 else Conjunction(tuple(tests))
     return replace(cond, **fields)
+
+
+__all__ = ["KCond", "format_kcond", "kernel_conditions", "positive_order", "symbol_ages",
+           "with_kernel_relations"]
