@@ -64,11 +64,11 @@ __all__ = ["BruteForceMatcher", "Match", "Rete", "check_production", "symbol_ord
 
 def same_symbol(a: object, b: object) -> bool:
     """Soar symbol equality: same type and same value (identifiers by identity)."""
-    return a.__class__ is b.__class__ and a == b
+    return type(a) is type(b) and a == b
 
 
 def _rank(value: object) -> int:
-    cls = value.__class__
+    cls = type(value)
     if cls is Identifier:
         return 0
     if cls is int or cls is float:
@@ -118,12 +118,12 @@ def _const_order(mixed: bool, holds: Callable[[Symbol, Symbol], bool]
 #: WME's value: the agent hands the matcher its productions so arranged
 #: (``reorder.with_kernel_relations``).
 _RELATIONS: dict[str, Callable[[Symbol, Symbol], bool]] = {
-    "<>": lambda a, b: not (a.__class__ is b.__class__ and a == b),
+    "<>": lambda a, b: not (type(a) is type(b) and a == b),
     "<": _const_order(True, symbol_order_less),
     ">": _const_order(False, lambda a, b: symbol_order_less(b, a)),
     "<=": _const_order(True, _less_equal),
     ">=": _const_order(False, lambda a, b: _less_equal(b, a)),
-    "<=>": lambda a, b: a.__class__ is b.__class__,
+    "<=>": lambda a, b: type(a) is type(b),
     "@": lambda a, b: False,
     "!@": lambda a, b: True,
 }
@@ -145,7 +145,7 @@ class Match:
     ``newest`` is the timetag of the newest matched WME and the first written index it is
     at (``(0, -1)`` without any): the order of match creation in the kernel's Rete.
 
-    Plain slots, filled when the match is made (the Rete's generated ``_Layout.match_of``):
+    Plain slots, filled when the match is made (the Rete's generated ``_Layout.match_lines``):
     most matches are fired, and CPython 3.11 reads a property through a C call into a new
     interpreter frame, several times the cost of the slot read."""
 
@@ -582,7 +582,7 @@ BetaSpec = tuple[Ref, str, Ref]
 
 
 def _hkey(value: object) -> object:
-    return (_FLOAT, value) if value.__class__ is float else value
+    return (_FLOAT, value) if type(value) is float else value
 
 
 def _typed(value: object) -> tuple[str, object]:
@@ -592,7 +592,7 @@ def _typed(value: object) -> tuple[str, object]:
 
 def _index_add(index: dict, value: object, item: object) -> None:
     """File ``item`` under ``value`` (hashed as ``_hkey`` does, inline: this is hot)."""
-    key = (_FLOAT, value) if value.__class__ is float else value
+    key = (_FLOAT, value) if type(value) is float else value
     bucket = index.get(key)
     if bucket is None:
         index[key] = {item: None}
@@ -601,7 +601,7 @@ def _index_add(index: dict, value: object, item: object) -> None:
 
 
 def _index_remove(index: dict, value: object, item: object) -> None:
-    key = (_FLOAT, value) if value.__class__ is float else value
+    key = (_FLOAT, value) if type(value) is float else value
     bucket = index[key]
     del bucket[item]
     if not bucket:
@@ -794,7 +794,7 @@ class _Node:
             vals = tok.vals
             for pos, index in self.index_list:
                 key = vals[pos]
-                if key.__class__ is float:
+                if type(key) is float:
                     key = (_FLOAT, key)
                 bucket = index.get(key)
                 if bucket is None:
@@ -811,7 +811,7 @@ class _Node:
             vals = tok.vals
             for pos, index in self.index_list:
                 key = vals[pos]
-                if key.__class__ is float:
+                if type(key) is float:
                     key = (_FLOAT, key)
                 bucket = index[key]
                 del bucket[tok]
@@ -959,7 +959,7 @@ class _NegativeNode(_Node):
         if self.pos >= 0:
             value = vals[self.pos]
             _index_add(self.every_index, value, tok)
-            bucket = self.amem_index.get((_FLOAT, value) if value.__class__ is float else value)
+            bucket = self.amem_index.get((_FLOAT, value) if type(value) is float else value)
         else:
             bucket = self.amem.wmes
         blockers: dict[WME, None] | None = None
@@ -1377,7 +1377,7 @@ class _QueryNCCNode(_Node):
             return
         for getter, index in self.seed_filters[k]:
             key = getter(wme)
-            if key.__class__ is float:
+            if type(key) is float:
                 key = (_FLOAT, key)
             if key not in index:
                 return  # joins with no WME of another inner condition: blocks nobody
@@ -1550,9 +1550,15 @@ class _RunNode(_Node):
 
 @mypyc_attr(native_class=False)  # methods and generated functions in the same places
 class _ProductionNode(_Node):
-    """Bottom of a production: each token is a Match."""
+    """Bottom of a production: each token is a Match.
 
-    __slots__ = ("production", "layout", "added", "removed")
+    Both activations are generated for the production (on first use) as straight-line
+    code, the Match made inline (``_Layout.match_lines``): most matches are fired, which
+    needs all their fields, and compiled methods of this class would reach the tokens'
+    and matches' slots through the generic attribute lookup, several times slower than
+    the interpreter's specialized slot access."""
+
+    __slots__ = ("production", "layout", "added", "removed", "left_activate", "forget")
 
     def __init__(self, rete: Rete, parent: _Node, production: Production,
                  layout: _Layout) -> None:
@@ -1562,40 +1568,42 @@ class _ProductionNode(_Node):
         # the Rete's _Changes, whose dicts are emptied in place (never replaced)
         self.added = rete._changes.added
         self.removed = rete._changes.removed
+        self.left_activate: Callable[[_Token], None] = self._compile_then_left
+        self.forget: Callable[[_Token], None] = self._compile_then_forget
 
-    def left_activate(self, t: _Token) -> None:
-        match = self.layout.match_of(t)
-        tok = _new(_Token)
-        tok.parent, tok.wme, tok.vals, tok.node = t, None, None, self
-        tok.children = None
-        tok.extra = match
-        siblings = t.children
-        if siblings is None:
-            t.children = {tok: None}
-        else:
-            siblings[tok] = None
-        self.tokens[tok] = None
-        self.added[match] = None
+    def _compile_then_left(self, t: _Token) -> None:
+        self._compile()
+        self.left_activate(t)
 
-    def forget(self, tok: _Token) -> None:
-        del self.tokens[tok]
-        match = tok.extra
-        if match is not None:  # None: the match moved to a rebuilt network (Rete._rebuild)
-            # _Changes.retract, inline: an appear/retract pair in one interval cancels out
-            if match in self.added:
-                del self.added[match]
-            else:
-                self.removed[match] = None
+    def _compile_then_forget(self, tok: _Token) -> None:
+        self._compile()
+        self.forget(tok)
+
+    def _compile(self) -> None:
+        """Generate ``left_activate`` (make the Match and its token, report it) and
+        ``forget`` (drop the token; retract its Match, or cancel its appearance in this
+        interval, as ``_Changes.retract`` does; a token without a Match is one whose Match
+        moved to a rebuilt network, see Rete._rebuild)."""
+        namespace: dict[str, object] = {
+            "NEW": _new, "Match": Match, "P": self.production, "Tok": _Token, "N": self,
+            "T": self.tokens, "A": self.added, "D": self.removed}
+        left = ["def left_activate(t):", *self.layout.match_lines("t", "    "),
+                *_token_lines("    ", "t", "None", "None"), "    tok.extra = m",
+                "    s = t.children", "    if s is None: t.children = {tok: None}",
+                "    else: s[tok] = None", "    T[tok] = None", "    A[m] = None"]
+        forget = ["def forget(tok):", "    del T[tok]", "    m = tok.extra",
+                  "    if m is not None:", "        if m in A: del A[m]",
+                  "        else: D[m] = None"]
+        self.left_activate = define(left, namespace, "left_activate")
+        self.forget = define(forget, dict(namespace), "forget")
 
 
 class _Layout:
-    """Where a production's WMEs and variables sit in its tokens.
+    """Where a production's WMEs and variables sit in its tokens, and the generated lines
+    that make the Match of a token (``match_lines``): a loop over the levels that tests
+    each one's kind costs twice as much as straight-line code."""
 
-    ``match_of`` is generated for the production (on first use) as straight-line code that
-    makes the Match of a token: a loop over the levels that tests each one's kind costs
-    twice as much, and most matches are fired, which needs all their fields."""
-
-    __slots__ = ("production", "levels", "size", "bindings", "positive", "match_of")
+    __slots__ = ("production", "levels", "size", "bindings", "positive")
 
     def __init__(self, production: Production, levels: list[tuple[int, ...]],
                  bindings: list[tuple[str, int]], positive: set[int]) -> None:
@@ -1606,31 +1614,29 @@ class _Layout:
         self.size = sum(len(level) for level in levels)
         self.bindings = bindings
         self.positive = positive  # written indices of the positive conditions
-        self.match_of: Callable[[_Token], Match] = self._compile_then_match
 
-    def _compile_then_match(self, tok: _Token) -> Match:
-        """Generate ``match_of``: the WMEs in written order (``None`` for negations),
-        ``newest`` (the first index of the newest WME, found in written order), and the
-        variables' values as a dict literal."""
+    def match_lines(self, tok: str, pad: str) -> list[str]:
+        """Generated code: ``m`` = the Match of the token ``tok`` (``NEW``, ``Match`` and the
+        production ``P`` in the namespace): the WMEs in written order (``None`` for
+        negations), ``newest`` (the first index of the newest WME, found in written
+        order), and the variables' values as a dict literal."""
         items = "".join(f"{name!r}: v[{pos}], " for name, pos in self.bindings)
-        lines = ["def match_of(tok):", "    m = NEW(Match)", "    m.production = P",
-                 "    v = tok.vals", f"    m.bindings = {{{items}}}"]
+        lines = ["m = NEW(Match)", "m.production = P", f"v = {tok}.vals",
+                 f"m.bindings = {{{items}}}", f"k = {tok}"]
         last = len(self.levels) - 1
         for k, level in enumerate(self.levels):
             if len(level) > 1:
-                lines.append(f"    {', '.join(f'w{i}' for i in level)}, = tok.wme")
+                lines.append(f"{', '.join(f'w{i}' for i in level)}, = k.wme")
             elif level[0] in self.positive:
-                lines.append(f"    w{level[0]} = tok.wme")
+                lines.append(f"w{level[0]} = k.wme")
             if k < last:
-                lines.append("    tok = tok.parent")
-        lines.append("    newest, at = 0, -1")
+                lines.append("k = k.parent")
+        lines.append("newest, at = 0, -1")
         for i in sorted(self.positive):
-            lines.append(f"    if w{i}.timetag > newest: newest, at = w{i}.timetag, {i}")
+            lines.append(f"if w{i}.timetag > newest: newest, at = w{i}.timetag, {i}")
         written = "".join(f"w{i}, " if i in self.positive else "None, " for i in range(self.size))
-        lines += [f"    m.wmes = ({written})", "    m.newest = (newest, at)", "    return m"]
-        namespace = {"NEW": _new, "Match": Match, "P": self.production}
-        self.match_of = define(lines, namespace, "match_of")  # type: ignore[method-assign]
-        return self.match_of(tok)
+        lines += [f"m.wmes = ({written})", "m.newest = (newest, at)"]
+        return [pad + line for line in lines]
 
 
 # ----- compiling conditions -------------------------------------------------------------------
@@ -2128,7 +2134,7 @@ class Rete:
         if self._pending:
             self._flush()
         attr, value = wme.attr, wme.value
-        key = (_IDENT if attr.__class__ is Identifier else attr,
+        key = (_IDENT if type(attr) is Identifier else attr,
                value if value in self._tested_values else _UNTESTED,  # an identifier never is
                wme.acceptable)
         entry = self._alpha_cache.get(key)
@@ -2554,13 +2560,13 @@ class Rete:
             node = tok.node
             if node is None:
                 continue
-            if node.__class__ is join:
+            if type(node) is join:
                 del node.tokens[tok]
                 if node.index_list:
                     vals = tok.vals
                     for pos, index in node.index_list:
                         key = vals[pos]
-                        if key.__class__ is float:
+                        if type(key) is float:
                             key = (_FLOAT, key)
                         bucket = index[key]
                         del bucket[tok]
@@ -2575,7 +2581,8 @@ class Rete:
             children = tok.children
             if children:
                 tok.children = None
-                stack.extend(children)
+                for child in children:  # not stack.extend: compiled, it copies the dict first
+                    stack.append(child)
 
 
 # ---------------------------------------------------------------------------------------------
