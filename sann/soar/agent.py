@@ -19,7 +19,6 @@ import gc
 import os
 import sys
 import weakref
-from bisect import bisect_left
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import TextIO, cast
@@ -999,9 +998,9 @@ class Agent:
         firings come oldest WME first), so a match is made when its oldest WME of the batch
         enters, and the matches of older WMEs are made later; matches made by no new WME
         (a removal unblocked them) come first, as before. See ``_kernel_key``."""
-        creator = self._creator
-        creators = [creator(match, start) for match in new]
-        firsts = [(0, tt) if tt <= start else (1, -tt) for tt, _ in creators]
+        creators = [_creator(match, start) for match in new]
+        firsts: list[tuple[int, int]] = [(0, tt) if tt <= start else (1, -tt)
+                                         for tt, _ in creators]
         if len(new) == 2:  # the usual case, without sorting
             one: tuple
             two: tuple
@@ -1009,7 +1008,7 @@ class Agent:
             if one == two:
                 one, two = self._tied_keys(firsts, new, creators)
             return [new[1], new[0]] if two < one else new
-        keys = firsts
+        keys: list[tuple] = list(firsts)
         if len(set(firsts)) < len(firsts):
             keys = self._tied_keys(firsts, new, creators)
         order = sorted(range(len(new)), key=keys.__getitem__)
@@ -1017,14 +1016,17 @@ class Agent:
 
     def _tied_keys(self, firsts: list[tuple[int, int]], new: list,
                    creators: list[tuple[int, int]]) -> list[tuple]:
-        """``(first, *_kernel_key[1:])`` for each new match; the matches made at one join
-        (same creating WME, alpha memory and path) also get the order of their tokens
+        """``(first, *_kernel_key[1:])`` for each new match whose ``first`` another shares
+        (the others' ``first`` settles their order); the matches made at one join (same
+        creating WME, alpha memory and path) also get the order of their tokens
         (``_token_order``) and one relinking time, the earliest: the kernel relinks a join
         once, when its parent memory gets its first token. Tokens are ordered only there:
         elsewhere the key is settled before (measured by callgrind: most ties are not)."""
-        kernel_key = self._kernel_key
-        keys = [first + kernel_key(match, creator)[1:]
-                for first, match, creator in zip(firsts, new, creators, strict=True)]
+        shared = _shared(firsts)
+        keys: list[tuple] = []
+        for first, match, creator in zip(firsts, new, creators, strict=True):
+            keys.append(first + self._kernel_key(match, creator)[1:] if first in shared
+                        else first)
         if len(keys) == 2:  # the usual tie: two joins, settled without the token order
             one, two = keys
             if len(one) < 5 or len(two) < 5 or one[2] != two[2] or one[4] != two[4]:
@@ -1037,26 +1039,9 @@ class Agent:
             if len(members) > 1:
                 linked = min(keys[k][3] for k in members)
                 for k in members:
-                    full = kernel_key(new[k], creators[k], True)
+                    full = self._kernel_key(new[k], creators[k], True)
                     keys[k] = (*keys[k][:3], linked, *full[3:])
         return keys
-
-    @staticmethod
-    def _creator(match: object, start: int) -> tuple[int, int]:
-        """The timetag and first index of the match's oldest WME newer than ``start`` (its
-        newest WME when none is)."""
-        found = match.newest  # type: ignore[attr-defined]
-        newest = found[0]
-        if newest <= start:
-            return found
-        oldest = newest
-        for wme in match.wmes:  # type: ignore[attr-defined]
-            if wme is not None and start < wme.timetag < oldest:
-                oldest = wme.timetag
-        if oldest == newest:
-            return found
-        wmes = match.wmes  # type: ignore[attr-defined]
-        return oldest, next(i for i, w in enumerate(wmes) if w is not None and w.timetag == oldest)
 
     def _retract_matches(self, gone: list, blocked: int = -1) -> None:
         """Schedule the retraction of fired matches that stopped matching, in creation
@@ -1112,17 +1097,17 @@ class Agent:
         order = sorted(range(len(removed)), key=keys.__getitem__, reverse=True)
         return [removed[k] for k in order]
 
-    def _creation_keys(self, matches: list) -> list[tuple]:
+    def _creation_keys(self, matches: list) -> list:
         """Sort keys of the order the kernel's Rete made ``matches`` in: the batch of the
         newest WME, then the WME of that batch that entered last (a batch enters newest
         first: its oldest), then, only for ties, ``_kernel_key`` with the token order."""
         starts = self._batch_starts
-        creator = self._creator
-        creators = []
-        firsts = []
+        creators: list[tuple[int, int]] = []
+        firsts: list[tuple[int, int]] = []
         for match in matches:
-            batch = bisect_left(starts, match.newest[0])
-            made = creator(match, starts[batch - 1] if batch else 0)
+            newest: tuple[int, int] = match.newest
+            batch = _batch_of(starts, newest[0])
+            made = _creator(match, starts[batch - 1] if batch else 0)
             creators.append(made)
             firsts.append((batch, -made[0]))
         if len(set(firsts)) == len(firsts):
@@ -1233,17 +1218,23 @@ class Agent:
         # WME before it, in the order the kernel's Rete took the WMEs in (the negated
         # _entry_rank). Joins relinked by one WME's entry go in the order it activated
         # them: its (* ^attr *) memory before (* ^attr value), each's joins by path.
-        born = place[2]
+        born: int = place[2]
         starts = self._batch_starts
-        linked: tuple = (bisect_left(starts, born), _LATEST)
+        link_batch = _batch_of(starts, born)
+        link_time = 0
+        link_place: tuple | None = None
         for j in place[1]:
             other_wme = wmes[j]
-            if other_wme is not None and other_wme.timetag > born:
-                batch, timetag = _entry_rank(other_wme, starts)
-                rank = (-batch, -timetag)
-                if rank > linked[:2]:
-                    other = places[j]
-                    linked = (*rank, other[0], other[3])
+            if other_wme is None:
+                continue
+            timetag: int = other_wme.timetag
+            if timetag > born:
+                batch = _batch_of(starts, timetag)
+                if batch > link_batch or (link_place is not None and batch == link_batch
+                                          and -timetag > link_time):
+                    link_batch, link_time, link_place = batch, -timetag, places[j]
+        linked = ((link_batch, _LATEST) if link_place is None
+                  else (link_batch, link_time, link_place[0], link_place[3]))
         if not tokens:
             return (newest, place[0], linked, place[3])
         return (newest, place[0], linked, place[3],
@@ -2544,8 +2535,51 @@ def _with_justifications(fired: list[Instantiation],
 def _entry_rank(wme: WME, starts: list[int]) -> tuple[int, int]:
     """When the kernel's Rete took ``wme`` in, as a sort key, latest first: batch after
     batch (``starts``: the timetag before each), a batch's WMEs newest first."""
-    timetag = wme.timetag
-    return (-bisect_left(starts, timetag), timetag)
+    timetag: int = wme.timetag
+    return (-_batch_of(starts, timetag), timetag)
+
+
+def _batch_of(starts: list[int], timetag: int) -> int:
+    """``bisect_left(starts, timetag)``: the batch of a WME (see ``_entry_rank``), in
+    native integers (the bisect module's compares Python objects, ten times slower)."""
+    low, high = 0, len(starts)
+    while low < high:
+        middle = (low + high) >> 1
+        if starts[middle] < timetag:
+            low = middle + 1
+        else:
+            high = middle
+    return low
+
+
+def _creator(match: object, start: int) -> tuple[int, int]:
+    """The timetag and first index of the match's oldest WME newer than ``start`` (its
+    newest WME when none is)."""
+    found: tuple[int, int] = match.newest  # type: ignore[attr-defined]
+    newest = found[0]
+    if newest <= start:
+        return found
+    oldest, index = newest, -1
+    wmes: tuple[WME | None, ...] = match.wmes  # type: ignore[attr-defined]
+    for i, wme in enumerate(wmes):
+        if wme is not None:
+            timetag: int = wme.timetag
+            if start < timetag < oldest:
+                oldest, index = timetag, i
+    return found if index < 0 else (oldest, index)
+
+
+def _shared(firsts: list[tuple[int, int]]) -> set[tuple[int, int]]:
+    """The keys that occur more than once."""
+    if len(firsts) == 2:
+        return set(firsts) if firsts[0] == firsts[1] else set()
+    seen: set[tuple[int, int]] = set()
+    shared: set[tuple[int, int]] = set()
+    for first in firsts:
+        if first in seen:
+            shared.add(first)
+        seen.add(first)
+    return shared
 
 
 def _creation_key(ranks: list[tuple[int, int]], sign: int) -> tuple:
