@@ -1006,35 +1006,46 @@ class Agent:
             two: tuple
             one, two = firsts
             if one == two:
-                one, two = self._tied_keys(firsts, new, creators)
+                one, two = self._tied_keys(firsts, new, creators, None)
             return [new[1], new[0]] if two < one else new
         keys: list[tuple] = list(firsts)
-        if len(set(firsts)) < len(firsts):
-            keys = self._tied_keys(firsts, new, creators)
+        shared = _shared(firsts)
+        if shared:
+            keys = self._tied_keys(firsts, new, creators, shared)
         order = sorted(range(len(new)), key=keys.__getitem__)
         return [new[k] for k in order]
 
     def _tied_keys(self, firsts: list[tuple[int, int]], new: list,
-                   creators: list[tuple[int, int]]) -> list[tuple]:
+                   creators: list[tuple[int, int]],
+                   shared: set[tuple[int, int]] | None) -> list[tuple]:
         """``(first, *_kernel_key[1:])`` for each new match whose ``first`` another shares
-        (the others' ``first`` settles their order); the matches made at one join (same
-        creating WME, alpha memory and path) also get the order of their tokens
-        (``_token_order``) and one relinking time, the earliest: the kernel relinks a join
-        once, when its parent memory gets its first token. Tokens are ordered only there:
-        elsewhere the key is settled before (measured by callgrind: most ties are not)."""
-        shared = _shared(firsts)
+        (in ``shared``; ``None``: all do), the others' ``first`` alone (it settles their
+        order); the matches made at one join (same creating WME, alpha memory and path)
+        also get the order of their tokens (``_token_order``) and one relinking time, the
+        earliest: the kernel relinks a join once, when its parent memory gets its first
+        token. Tokens are ordered only there: elsewhere the key is settled before
+        (measured by callgrind: most ties are not)."""
         keys: list[tuple] = []
-        for first, match, creator in zip(firsts, new, creators, strict=True):
-            keys.append(first + self._kernel_key(match, creator)[1:] if first in shared
-                        else first)
-        if len(keys) == 2:  # the usual tie: two joins, settled without the token order
-            one, two = keys
-            if len(one) < 5 or len(two) < 5 or one[2] != two[2] or one[4] != two[4]:
+        joined: list[int] = []  # the keys that name a join
+        for k in range(len(new)):
+            first = firsts[k]
+            if shared is not None and first not in shared:
+                keys.append(first)
+                continue
+            key = first + self._kernel_key(new[k], creators[k])[1:]
+            if len(key) > 4:
+                joined.append(k)
+            keys.append(key)
+        if len(joined) < 2:
+            return keys
+        if len(joined) == 2:  # the usual tie: two joins, settled without the token order
+            one, two = keys[joined[0]], keys[joined[1]]
+            if one[0] != two[0] or one[1] != two[1] or one[2] != two[2] or one[4] != two[4]:
                 return keys
         joins: dict[tuple, list[int]] = {}
-        for k, key in enumerate(keys):
-            if len(key) > 4:
-                joins.setdefault((key[0], key[1], key[2], key[4]), []).append(k)
+        for k in joined:
+            key = keys[k]
+            joins.setdefault((key[0], key[1], key[2], key[4]), []).append(k)
         for members in joins.values():
             if len(members) > 1:
                 linked = min(keys[k][3] for k in members)
@@ -1110,9 +1121,10 @@ class Agent:
             made = _creator(match, starts[batch - 1] if batch else 0)
             creators.append(made)
             firsts.append((batch, -made[0]))
-        if len(set(firsts)) == len(firsts):
+        shared = _shared(firsts)
+        if not shared:
             return firsts
-        return self._tied_keys(firsts, matches, creators)
+        return self._tied_keys(firsts, matches, creators, shared)
 
     def _queue_matches(self, new: list) -> None:
         """Queue new matches at their goals as i- or o-assertions."""
@@ -2541,15 +2553,31 @@ def _entry_rank(wme: WME, starts: list[int]) -> tuple[int, int]:
 
 def _batch_of(starts: list[int], timetag: int) -> int:
     """``bisect_left(starts, timetag)``: the batch of a WME (see ``_entry_rank``), in
-    native integers (the bisect module's compares Python objects, ten times slower)."""
-    low, high = 0, len(starts)
-    while low < high:
+    native integers (the bisect module compares Python objects, ten times slower), and
+    searched from the end, where the batches of the WMEs asked about mostly are."""
+    high = len(starts) - 1
+    if high < 0 or starts[high] < timetag:
+        return high + 1
+    if starts[0] >= timetag:
+        return 0
+    low = 0  # from here on starts[low] < timetag <= starts[high]
+    step = 1
+    while high - low > 1:
+        probe = high - step
+        if probe <= low:
+            break
+        if starts[probe] < timetag:
+            low = probe
+            break
+        high = probe
+        step <<= 1
+    while high - low > 1:
         middle = (low + high) >> 1
         if starts[middle] < timetag:
-            low = middle + 1
+            low = middle
         else:
             high = middle
-    return low
+    return high
 
 
 def _creator(match: object, start: int) -> tuple[int, int]:
@@ -2570,9 +2598,9 @@ def _creator(match: object, start: int) -> tuple[int, int]:
 
 
 def _shared(firsts: list[tuple[int, int]]) -> set[tuple[int, int]]:
-    """The keys that occur more than once."""
+    """The keys that occur more than once (none, usually)."""
     if len(firsts) == 2:
-        return set(firsts) if firsts[0] == firsts[1] else set()
+        return {firsts[0]} if firsts[0] == firsts[1] else set()
     seen: set[tuple[int, int]] = set()
     shared: set[tuple[int, int]] = set()
     for first in firsts:
