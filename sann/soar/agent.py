@@ -616,8 +616,10 @@ class Agent:
             # Working memory only shrinks here, so its high-water mark is reached just
             # before a removal (or now: see stats).
             self._wm_max = len(wm)
-        if wm.pop(wme.timetag, None) is None:
+        timetag: int = wme.timetag
+        if timetag not in wm:  # (not ``wm.pop(timetag, None)``: mypyc calls that generically)
             return
+        del wm[timetag]
         self.matcher.remove_wme(wme)
         value = wme.value
         if type(value) is Identifier and value.level is None:
@@ -919,7 +921,6 @@ class Agent:
         fired: list[Instantiation] = []
         o_support = firing == "PE"
         pending_goal = self._pending_goal
-        fire = self._fire
         postponed: list[tuple[object, ProductionInfo]] = []
         for match, info in reversed(matches):
             if type(match) is _JustificationMatch:
@@ -929,8 +930,9 @@ class Agent:
             if change_level and self._touches_level(match, info, change_level):
                 postponed.append((match, info))
                 continue
-            pending_goal.pop(match, None)
-            fired.append(fire(match, info, goal, o_support))
+            if match in pending_goal:
+                del pending_goal[match]
+            fired.append(self._fire(match, info, goal, o_support))
         if postponed:
             # They keep their places in the queue (measured in soar_sml: two snc matches
             # the waterfall put off, of (S1 ^count 2) and the newer-entered (S1 ^count 0),
@@ -1062,14 +1064,16 @@ class Agent:
         fired: list[Instantiation] = []
         first_removed = 0  # fired[:first_removed]: blocked by new WMEs (when known)
         for k, match in enumerate(gone):
-            inst = inst_of.pop(match, None)
+            inst = inst_of.get(match)
             if inst is not None:
+                del inst_of[match]
                 fired.append(inst)
                 if k < blocked:
                     first_removed += 1
                 continue
-            goal = pending_goal.pop(match, None)
+            goal = pending_goal.get(match)
             if goal is not None:
+                del pending_goal[match]
                 goal.pending_i.pop(match, None)
                 goal.pending_o.pop(match, None)
         if len(fired) > 1:
@@ -1313,13 +1317,12 @@ class Agent:
         trace = self.trace_level
         if trace >= 3:
             self._trace_retraction(inst)
-        remove = self._remove_preference
         # In the order the kernel made them (inst.prefs is newest first): the slots they
         # leave are decided in that order's reverse, which the trace shows (measured:
         # <=WM: (37: O4 ^name buy), then (38: O4 ^item I5) for a rule that made both).
         for pref in reversed(inst.prefs):
             if pref.live and not pref.o_supported:
-                remove(pref)
+                self._remove_preference(pref)
         if inst.goal.level > 1 and not any(p.live for p in inst.prefs):
             inst.goal.insts.pop(inst, None)
         if inst.is_justification:
@@ -1366,7 +1369,6 @@ class Agent:
         for pref in o_rejects:  # not traced itself (measured): what it removes is
             self._o_reject(pref)
             pref.inst = None  # type: ignore[assignment]  # never in a slot: done with
-        add = self._add_preference
         for inst in insts:
             for pref in reversed(inst.prefs):
                 if pref.inst is None:  # an o-reject, done with above
@@ -1378,7 +1380,7 @@ class Agent:
                     continue
                 if tracing:
                     self._emit_line(trace_preference("+", pref))
-                add(pref)
+                self._add_preference(pref)
 
     def _already_supported(self, pref: Preference) -> bool:
         """Whether the slot already holds the same o-supported preference: the kernel then
@@ -1549,15 +1551,14 @@ class Agent:
             changed, self._changed = self._changed, []
             adds: list[tuple[Slot, object, Symbol]] = []
             removes: list[WME] = []
-            diff = self._diff_slot
             gds_index = self._gds_index
             for slot in reversed(changed):
                 slot.changed = False
                 if not gds_index:
-                    diff(slot, adds, removes)
+                    self._diff_slot(slot, adds, removes)
                     continue
                 before = len(removes)
-                diff(slot, adds, removes)
+                self._diff_slot(slot, adds, removes)
                 if len(removes) > before:
                     # Like the kernel, while deciding the slot: a substate whose GDS holds
                     # a WME about to go is removed now; WMEs already decided still come
@@ -1573,11 +1574,10 @@ class Agent:
             if tracing:
                 context_removals += buffer[traced:]
                 del buffer[traced:]
-            remove_wme = self._remove_wme
             if removes:
                 self.matcher.mark_removals()
             for wme in removes:
-                remove_wme(wme)
+                self._remove_wme(wme)
             if self._pending_gds:
                 self._extend_gds()
             if self._unlinked:
@@ -1618,15 +1618,14 @@ class Agent:
     def _add_slot_wmes(self, adds: list[tuple[Slot, object, Symbol]]) -> None:
         """Make the WMEs the slot diffs decided on: ``(slot, value key, value)``; the diff
         already entered the key in ``slot.wmes``, without its WME."""
-        add_wme = self._add_wme
         if self._top.sub is None:  # no substate: no WME to remember the source of
             for slot, key, value in adds:
-                slot.wmes[key] = add_wme(slot.id, slot.attr, value)
+                slot.wmes[key] = self._add_wme(slot.id, slot.attr, value)
             return
         levels = self._level
         for slot, key, value in adds:
             ident = slot.id
-            wme = slot.wmes[key] = add_wme(ident, slot.attr, value)
+            wme = slot.wmes[key] = self._add_wme(ident, slot.attr, value)
             level = ident.level
             if (level if level is not None else levels.get(ident, 1)) > 1:
                 self._remember_source(wme, slot, (ACCEPTABLE,))
@@ -2481,7 +2480,6 @@ class Agent:
         when removed: unremoved without a WME it is added; removed with a WME it goes
         (removed before it was ever added, both entries are no-ops)."""
         ops, self._input_ops = self._input_ops, []
-        add_wme = self._add_wme
         arch = self._arch
         for handle in ops:
             if handle.removed:
@@ -2492,7 +2490,7 @@ class Agent:
             if handle.wme is not None:
                 continue  # defensive: a live handle is added once
             ident = handle.id
-            wme = handle.wme = add_wme(ident, handle.attr, handle.value)
+            wme = handle.wme = self._add_wme(ident, handle.attr, handle.value)
             bucket = arch.get(ident)
             if bucket is None:
                 arch[ident] = [wme]
