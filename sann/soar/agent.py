@@ -504,6 +504,9 @@ class Agent:
         self._gds_requests: list[tuple[Goal, Instantiation]] = []
         # every earlier _batch_start that began a batch of new WMEs (see _entry_rank)
         self._batch_starts: list[int] = []
+        # _batch_of of the joins' birth timetags: it changes no more once asked for (a
+        # later batch starts after every WME already made)
+        self._born_batches: dict[int, int] = {}
         # WMEs added and removed since the last trace of working-memory changes (watch 4+)
         self._traced_adds = []
         self._traced_removes: list[WME] = []
@@ -1001,8 +1004,10 @@ class Agent:
         enters, and the matches of older WMEs are made later; matches made by no new WME
         (a removal unblocked them) come first, as before. See ``_kernel_key``."""
         creators = [_creator(match, start) for match in new]
-        firsts: list[tuple[int, int]] = [(0, tt) if tt <= start else (1, -tt)
-                                         for tt, _ in creators]
+        firsts: list[tuple] = []
+        for creator in creators:
+            made: int = creator[0]
+            firsts.append((0, made) if made <= start else (1, -made))
         if len(new) == 2:  # the usual case, without sorting
             one: tuple
             two: tuple
@@ -1017,9 +1022,8 @@ class Agent:
         order = sorted(range(len(new)), key=keys.__getitem__)
         return [new[k] for k in order]
 
-    def _tied_keys(self, firsts: list[tuple[int, int]], new: list,
-                   creators: list[tuple[int, int]],
-                   shared: set[tuple[int, int]] | None) -> list[tuple]:
+    def _tied_keys(self, firsts: list[tuple], new: list, creators: list[tuple],
+                   shared: set[tuple] | None) -> list[tuple]:
         """``(first, *_kernel_key[1:])`` for each new match whose ``first`` another shares
         (in ``shared``; ``None``: all do), the others' ``first`` alone (it settles their
         order); the matches made at one join (same creating WME, alpha memory and path)
@@ -1117,14 +1121,15 @@ class Agent:
         newest WME, then the WME of that batch that entered last (a batch enters newest
         first: its oldest), then, only for ties, ``_kernel_key`` with the token order."""
         starts = self._batch_starts
-        creators: list[tuple[int, int]] = []
-        firsts: list[tuple[int, int]] = []
+        creators: list[tuple] = []
+        firsts: list[tuple] = []
         for match in matches:
-            newest: tuple[int, int] = match.newest
-            batch = _batch_of(starts, newest[0])
+            newest: int = match.newest[0]
+            batch = _batch_of(starts, newest)
             made = _creator(match, starts[batch - 1] if batch else 0)
             creators.append(made)
-            firsts.append((batch, -made[0]))
+            timetag: int = made[0]
+            firsts.append((batch, -timetag))
         shared = _shared(firsts)
         if not shared:
             return firsts
@@ -1201,7 +1206,7 @@ class Agent:
         order = sorted(range(len(items)), key=keys.__getitem__, reverse=newest_first)
         return [items[k] for k in order]
 
-    def _kernel_key(self, match: object, creator: tuple[int, int] | None = None,
+    def _kernel_key(self, match: object, creator: tuple | None = None,
                     tokens: bool = False) -> tuple:
         """The order the kernel's Rete makes new matches in: by the newest matched WME, then
         by the alpha memory it entered (``(* ^attr *)`` before ``(* ^attr value)``) and the
@@ -1236,7 +1241,9 @@ class Agent:
         # them: its (* ^attr *) memory before (* ^attr value), each's joins by path.
         born: int = place[2]
         starts = self._batch_starts
-        link_batch = _batch_of(starts, born)
+        link_batch = self._born_batches.get(born)
+        if link_batch is None:
+            link_batch = self._born_batches[born] = _batch_of(starts, born)
         link_time = 0
         link_place: tuple | None = None
         for j in place[1]:
@@ -2578,11 +2585,12 @@ def _batch_of(starts: list[int], timetag: int) -> int:
     return high
 
 
-def _creator(match: object, start: int) -> tuple[int, int]:
+def _creator(match: object, start: int) -> tuple:
     """The timetag and first index of the match's oldest WME newer than ``start`` (its
-    newest WME when none is)."""
-    found: tuple[int, int] = match.newest  # type: ignore[attr-defined]
-    newest = found[0]
+    newest WME when none is). (The kernel-order keys are plain tuples: mypyc would unpack
+    a ``tuple[int, int]`` into a C struct and box it anew at every use.)"""
+    found: tuple = match.newest  # type: ignore[attr-defined]
+    newest: int = found[0]
     if newest <= start:
         return found
     oldest, index = newest, -1
@@ -2595,12 +2603,12 @@ def _creator(match: object, start: int) -> tuple[int, int]:
     return found if index < 0 else (oldest, index)
 
 
-def _shared(firsts: list[tuple[int, int]]) -> set[tuple[int, int]]:
+def _shared(firsts: list[tuple]) -> set[tuple]:
     """The keys that occur more than once (none, usually)."""
     if len(firsts) == 2:
         return {firsts[0]} if firsts[0] == firsts[1] else set()
-    seen: set[tuple[int, int]] = set()
-    shared: set[tuple[int, int]] = set()
+    seen: set[tuple] = set()
+    shared: set[tuple] = set()
     for first in firsts:
         if first in seen:
             shared.add(first)
