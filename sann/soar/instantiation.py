@@ -481,7 +481,8 @@ def is_o_supported(
     make_ids = info.make_ids
     if not make_ids:
         return False  # the kernel fires write/halt-only rules as i-assertions
-    bindings = match.bindings if match is not None else {}  # type: ignore[attr-defined]
+    bindings: dict[str, Symbol] = (
+        match.bindings if match is not None else {})  # type: ignore[attr-defined]
     if info.proposal_ids and _proposes_on_a_state(info, bindings):
         return False
     applies = elaborates = False
