@@ -19,7 +19,6 @@ import gc
 import os
 import sys
 import weakref
-from bisect import bisect_left
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import TextIO, cast
@@ -505,6 +504,9 @@ class Agent:
         self._gds_requests: list[tuple[Goal, Instantiation]] = []
         # every earlier _batch_start that began a batch of new WMEs (see _entry_rank)
         self._batch_starts: list[int] = []
+        # _batch_of of the joins' birth timetags: it changes no more once asked for (a
+        # later batch starts after every WME already made)
+        self._born_batches: dict[int, int] = {}
         # WMEs added and removed since the last trace of working-memory changes (watch 4+)
         self._traced_adds = []
         self._traced_removes: list[WME] = []
@@ -617,8 +619,10 @@ class Agent:
             # Working memory only shrinks here, so its high-water mark is reached just
             # before a removal (or now: see stats).
             self._wm_max = len(wm)
-        if wm.pop(wme.timetag, None) is None:
+        timetag: int = wme.timetag
+        if timetag not in wm:  # (not ``wm.pop(timetag, None)``: mypyc calls that generically)
             return
+        del wm[timetag]
         self.matcher.remove_wme(wme)
         value = wme.value
         if type(value) is Identifier and value.level is None:
@@ -920,7 +924,6 @@ class Agent:
         fired: list[Instantiation] = []
         o_support = firing == "PE"
         pending_goal = self._pending_goal
-        fire = self._fire
         postponed: list[tuple[object, ProductionInfo]] = []
         for match, info in reversed(matches):
             if type(match) is _JustificationMatch:
@@ -930,8 +933,9 @@ class Agent:
             if change_level and self._touches_level(match, info, change_level):
                 postponed.append((match, info))
                 continue
-            pending_goal.pop(match, None)
-            fired.append(fire(match, info, goal, o_support))
+            if match in pending_goal:
+                del pending_goal[match]
+            fired.append(self._fire(match, info, goal, o_support))
         if postponed:
             # They keep their places in the queue (measured in soar_sml: two snc matches
             # the waterfall put off, of (S1 ^count 2) and the newer-entered (S1 ^count 0),
@@ -999,64 +1003,62 @@ class Agent:
         firings come oldest WME first), so a match is made when its oldest WME of the batch
         enters, and the matches of older WMEs are made later; matches made by no new WME
         (a removal unblocked them) come first, as before. See ``_kernel_key``."""
-        creator = self._creator
-        creators = [creator(match, start) for match in new]
-        firsts = [(0, tt) if tt <= start else (1, -tt) for tt, _ in creators]
+        creators = [_creator(match, start) for match in new]
+        firsts: list[tuple] = []
+        for creator in creators:
+            made: int = creator[0]
+            firsts.append((0, made) if made <= start else (1, -made))
         if len(new) == 2:  # the usual case, without sorting
             one: tuple
             two: tuple
             one, two = firsts
             if one == two:
-                one, two = self._tied_keys(firsts, new, creators)
+                one, two = self._tied_keys(firsts, new, creators, None)
             return [new[1], new[0]] if two < one else new
-        keys = firsts
-        if len(set(firsts)) < len(firsts):
-            keys = self._tied_keys(firsts, new, creators)
+        keys: list[tuple] = list(firsts)
+        shared = _shared(firsts)
+        if shared:
+            keys = self._tied_keys(firsts, new, creators, shared)
         order = sorted(range(len(new)), key=keys.__getitem__)
         return [new[k] for k in order]
 
-    def _tied_keys(self, firsts: list[tuple[int, int]], new: list,
-                   creators: list[tuple[int, int]]) -> list[tuple]:
-        """``(first, *_kernel_key[1:])`` for each new match; the matches made at one join
-        (same creating WME, alpha memory and path) also get the order of their tokens
-        (``_token_order``) and one relinking time, the earliest: the kernel relinks a join
-        once, when its parent memory gets its first token. Tokens are ordered only there:
-        elsewhere the key is settled before (measured by callgrind: most ties are not)."""
-        kernel_key = self._kernel_key
-        keys = [first + kernel_key(match, creator)[1:]
-                for first, match, creator in zip(firsts, new, creators, strict=True)]
-        if len(keys) == 2:  # the usual tie: two joins, settled without the token order
-            one, two = keys
-            if len(one) < 5 or len(two) < 5 or one[2] != two[2] or one[4] != two[4]:
+    def _tied_keys(self, firsts: list[tuple], new: list, creators: list[tuple],
+                   shared: set[tuple] | None) -> list[tuple]:
+        """``(first, *_kernel_key[1:])`` for each new match whose ``first`` another shares
+        (in ``shared``; ``None``: all do), the others' ``first`` alone (it settles their
+        order); the matches made at one join (same creating WME, alpha memory and path)
+        also get the order of their tokens (``_token_order``) and one relinking time, the
+        earliest: the kernel relinks a join once, when its parent memory gets its first
+        token. Tokens are ordered only there: elsewhere the key is settled before
+        (measured by callgrind: most ties are not)."""
+        keys: list[tuple] = []
+        joined: list[int] = []  # the keys that name a join
+        for k in range(len(new)):
+            first = firsts[k]
+            if shared is not None and first not in shared:
+                keys.append(first)
+                continue
+            key = first + self._kernel_key(new[k], creators[k])[1:]
+            if len(key) > 4:
+                joined.append(k)
+            keys.append(key)
+        if len(joined) < 2:
+            return keys
+        if len(joined) == 2:  # the usual tie: two joins, settled without the token order
+            one, two = keys[joined[0]], keys[joined[1]]
+            if one[0] != two[0] or one[1] != two[1] or one[2] != two[2] or one[4] != two[4]:
                 return keys
         joins: dict[tuple, list[int]] = {}
-        for k, key in enumerate(keys):
-            if len(key) > 4:
-                joins.setdefault((key[0], key[1], key[2], key[4]), []).append(k)
+        for k in joined:
+            key = keys[k]
+            joins.setdefault((key[0], key[1], key[2], key[4]), []).append(k)
         for members in joins.values():
             if len(members) > 1:
                 linked = min(keys[k][3] for k in members)
                 for k in members:
-                    full = kernel_key(new[k], creators[k], True)
+                    full = self._kernel_key(new[k], creators[k], True)
                     keys[k] = (*keys[k][:3], linked, *full[3:])
         return keys
-
-    @staticmethod
-    def _creator(match: object, start: int) -> tuple[int, int]:
-        """The timetag and first index of the match's oldest WME newer than ``start`` (its
-        newest WME when none is)."""
-        found = match.newest  # type: ignore[attr-defined]
-        newest = found[0]
-        if newest <= start:
-            return found
-        oldest = newest
-        for wme in match.wmes:  # type: ignore[attr-defined]
-            if wme is not None and start < wme.timetag < oldest:
-                oldest = wme.timetag
-        if oldest == newest:
-            return found
-        wmes = match.wmes  # type: ignore[attr-defined]
-        return oldest, next(i for i, w in enumerate(wmes) if w is not None and w.timetag == oldest)
 
     def _retract_matches(self, gone: list, blocked: int = -1) -> None:
         """Schedule the retraction of fired matches that stopped matching, in creation
@@ -1066,14 +1068,16 @@ class Agent:
         fired: list[Instantiation] = []
         first_removed = 0  # fired[:first_removed]: blocked by new WMEs (when known)
         for k, match in enumerate(gone):
-            inst = inst_of.pop(match, None)
+            inst = inst_of.get(match)
             if inst is not None:
+                del inst_of[match]
                 fired.append(inst)
                 if k < blocked:
                     first_removed += 1
                 continue
-            goal = pending_goal.pop(match, None)
+            goal = pending_goal.get(match)
             if goal is not None:
+                del pending_goal[match]
                 goal.pending_i.pop(match, None)
                 goal.pending_o.pop(match, None)
         if len(fired) > 1:
@@ -1109,25 +1113,26 @@ class Agent:
         join made its tokens visiting the parent's newest first. A match was made when the
         last of its WMEs entered the Rete (``_creation_keys``), not by its newest WME."""
         keys = self._creation_keys([inst.match for inst in removed])
-        order = sorted(range(len(removed)), key=keys.__getitem__, reverse=True)
-        return [removed[k] for k in order]
+        return [removed[k] for k in _latest_first(keys)]
 
-    def _creation_keys(self, matches: list) -> list[tuple]:
+    def _creation_keys(self, matches: list) -> list:
         """Sort keys of the order the kernel's Rete made ``matches`` in: the batch of the
         newest WME, then the WME of that batch that entered last (a batch enters newest
         first: its oldest), then, only for ties, ``_kernel_key`` with the token order."""
         starts = self._batch_starts
-        creator = self._creator
-        creators = []
-        firsts = []
+        creators: list[tuple] = []
+        firsts: list[tuple] = []
         for match in matches:
-            batch = bisect_left(starts, match.newest[0])
-            made = creator(match, starts[batch - 1] if batch else 0)
+            newest: int = match.newest[0]
+            batch = _batch_of(starts, newest)
+            made = _creator(match, starts[batch - 1] if batch else 0)
             creators.append(made)
-            firsts.append((batch, -made[0]))
-        if len(set(firsts)) == len(firsts):
+            timetag: int = made[0]
+            firsts.append((batch, -timetag))
+        shared = _shared(firsts)
+        if not shared:
             return firsts
-        return self._tied_keys(firsts, matches, creators)
+        return self._tied_keys(firsts, matches, creators, shared)
 
     def _queue_matches(self, new: list) -> None:
         """Queue new matches at their goals as i- or o-assertions."""
@@ -1200,7 +1205,7 @@ class Agent:
         order = sorted(range(len(items)), key=keys.__getitem__, reverse=newest_first)
         return [items[k] for k in order]
 
-    def _kernel_key(self, match: object, creator: tuple[int, int] | None = None,
+    def _kernel_key(self, match: object, creator: tuple | None = None,
                     tokens: bool = False) -> tuple:
         """The order the kernel's Rete makes new matches in: by the newest matched WME, then
         by the alpha memory it entered (``(* ^attr *)`` before ``(* ^attr value)``) and the
@@ -1233,17 +1238,25 @@ class Agent:
         # WME before it, in the order the kernel's Rete took the WMEs in (the negated
         # _entry_rank). Joins relinked by one WME's entry go in the order it activated
         # them: its (* ^attr *) memory before (* ^attr value), each's joins by path.
-        born = place[2]
+        born: int = place[2]
         starts = self._batch_starts
-        linked: tuple = (bisect_left(starts, born), _LATEST)
+        link_batch = self._born_batches.get(born)
+        if link_batch is None:
+            link_batch = self._born_batches[born] = _batch_of(starts, born)
+        link_time = 0
+        link_place: tuple | None = None
         for j in place[1]:
             other_wme = wmes[j]
-            if other_wme is not None and other_wme.timetag > born:
-                batch, timetag = _entry_rank(other_wme, starts)
-                rank = (-batch, -timetag)
-                if rank > linked[:2]:
-                    other = places[j]
-                    linked = (*rank, other[0], other[3])
+            if other_wme is None:
+                continue
+            timetag: int = other_wme.timetag
+            if timetag > born:
+                batch = _batch_of(starts, timetag)
+                if batch > link_batch or (link_place is not None and batch == link_batch
+                                          and -timetag > link_time):
+                    link_batch, link_time, link_place = batch, -timetag, places[j]
+        linked = ((link_batch, _LATEST) if link_place is None
+                  else (link_batch, link_time, link_place[0], link_place[3]))
         if not tokens:
             return (newest, place[0], linked, place[3])
         return (newest, place[0], linked, place[3],
@@ -1310,13 +1323,12 @@ class Agent:
         trace = self.trace_level
         if trace >= 3:
             self._trace_retraction(inst)
-        remove = self._remove_preference
         # In the order the kernel made them (inst.prefs is newest first): the slots they
         # leave are decided in that order's reverse, which the trace shows (measured:
         # <=WM: (37: O4 ^name buy), then (38: O4 ^item I5) for a rule that made both).
         for pref in reversed(inst.prefs):
             if pref.live and not pref.o_supported:
-                remove(pref)
+                self._remove_preference(pref)
         if inst.goal.level > 1 and not any(p.live for p in inst.prefs):
             inst.goal.insts.pop(inst, None)
         if inst.is_justification:
@@ -1363,7 +1375,6 @@ class Agent:
         for pref in o_rejects:  # not traced itself (measured): what it removes is
             self._o_reject(pref)
             pref.inst = None  # type: ignore[assignment]  # never in a slot: done with
-        add = self._add_preference
         for inst in insts:
             for pref in reversed(inst.prefs):
                 if pref.inst is None:  # an o-reject, done with above
@@ -1375,7 +1386,7 @@ class Agent:
                     continue
                 if tracing:
                     self._emit_line(trace_preference("+", pref))
-                add(pref)
+                self._add_preference(pref)
 
     def _already_supported(self, pref: Preference) -> bool:
         """Whether the slot already holds the same o-supported preference: the kernel then
@@ -1546,15 +1557,14 @@ class Agent:
             changed, self._changed = self._changed, []
             adds: list[tuple[Slot, object, Symbol]] = []
             removes: list[WME] = []
-            diff = self._diff_slot
             gds_index = self._gds_index
             for slot in reversed(changed):
                 slot.changed = False
                 if not gds_index:
-                    diff(slot, adds, removes)
+                    self._diff_slot(slot, adds, removes)
                     continue
                 before = len(removes)
-                diff(slot, adds, removes)
+                self._diff_slot(slot, adds, removes)
                 if len(removes) > before:
                     # Like the kernel, while deciding the slot: a substate whose GDS holds
                     # a WME about to go is removed now; WMEs already decided still come
@@ -1570,11 +1580,10 @@ class Agent:
             if tracing:
                 context_removals += buffer[traced:]
                 del buffer[traced:]
-            remove_wme = self._remove_wme
             if removes:
                 self.matcher.mark_removals()
             for wme in removes:
-                remove_wme(wme)
+                self._remove_wme(wme)
             if self._pending_gds:
                 self._extend_gds()
             if self._unlinked:
@@ -1615,15 +1624,14 @@ class Agent:
     def _add_slot_wmes(self, adds: list[tuple[Slot, object, Symbol]]) -> None:
         """Make the WMEs the slot diffs decided on: ``(slot, value key, value)``; the diff
         already entered the key in ``slot.wmes``, without its WME."""
-        add_wme = self._add_wme
         if self._top.sub is None:  # no substate: no WME to remember the source of
             for slot, key, value in adds:
-                slot.wmes[key] = add_wme(slot.id, slot.attr, value)
+                slot.wmes[key] = self._add_wme(slot.id, slot.attr, value)
             return
         levels = self._level
         for slot, key, value in adds:
             ident = slot.id
-            wme = slot.wmes[key] = add_wme(ident, slot.attr, value)
+            wme = slot.wmes[key] = self._add_wme(ident, slot.attr, value)
             level = ident.level
             if (level if level is not None else levels.get(ident, 1)) > 1:
                 self._remember_source(wme, slot, (ACCEPTABLE,))
@@ -1681,8 +1689,7 @@ class Agent:
         prefs = slot.prefs
         wmes = slot.wmes
         if not prefs:  # the slot's last preference went: so do all its WMEs
-            removes.extend(wmes.values())
-            wmes.clear()
+            _move_values(wmes, removes)
             return
         if len(prefs) == 1:
             acceptable = prefs.get(ACCEPTABLE)
@@ -1699,8 +1706,7 @@ class Agent:
                             removes.append(wmes.pop(other))
                     return
                 if wmes:
-                    removes.extend(wmes.values())
-                    wmes.clear()
+                    _move_values(wmes, removes)
                 wmes[key] = None  # type: ignore[assignment]
                 adds.append((slot, key, value))
                 return
@@ -2478,7 +2484,6 @@ class Agent:
         when removed: unremoved without a WME it is added; removed with a WME it goes
         (removed before it was ever added, both entries are no-ops)."""
         ops, self._input_ops = self._input_ops, []
-        add_wme = self._add_wme
         arch = self._arch
         for handle in ops:
             if handle.removed:
@@ -2489,7 +2494,7 @@ class Agent:
             if handle.wme is not None:
                 continue  # defensive: a live handle is added once
             ident = handle.id
-            wme = handle.wme = add_wme(ident, handle.attr, handle.value)
+            wme = handle.wme = self._add_wme(ident, handle.attr, handle.value)
             bucket = arch.get(ident)
             if bucket is None:
                 arch[ident] = [wme]
@@ -2541,11 +2546,95 @@ def _with_justifications(fired: list[Instantiation],
     return insts
 
 
+def _latest_first(keys: list) -> list[int]:
+    """``sorted(range(len(keys)), key=keys.__getitem__, reverse=True)``; the few keys of
+    the usual retraction (three in hanoi) by insertion, without sorted's calls."""
+    if len(keys) > 8:
+        return sorted(range(len(keys)), key=keys.__getitem__, reverse=True)
+    order: list[int] = []
+    for k in range(len(keys)):
+        key = keys[k]
+        place = len(order)
+        while place > 0 and keys[order[place - 1]] < key:  # after the equal ones: stable
+            place -= 1
+        order.insert(place, k)
+    return order
+
+
+def _move_values(wmes: dict[object, WME], removes: list[WME]) -> None:
+    """Empty a slot's WMEs into ``removes``, in order (a loop: mypyc's ``list.extend`` of
+    a dict's values goes through the generic iterator protocol, several times slower for
+    the usual one WME)."""
+    for wme in wmes.values():
+        removes.append(wme)
+    wmes.clear()
+
+
 def _entry_rank(wme: WME, starts: list[int]) -> tuple[int, int]:
     """When the kernel's Rete took ``wme`` in, as a sort key, latest first: batch after
     batch (``starts``: the timetag before each), a batch's WMEs newest first."""
-    timetag = wme.timetag
-    return (-bisect_left(starts, timetag), timetag)
+    timetag: int = wme.timetag
+    return (-_batch_of(starts, timetag), timetag)
+
+
+def _batch_of(starts: list[int], timetag: int) -> int:
+    """``bisect_left(starts, timetag)``: the batch of a WME (see ``_entry_rank``), in
+    native integers (the bisect module compares Python objects, ten times slower), and
+    searched from the end, where the batches of the WMEs asked about mostly are."""
+    high = len(starts) - 1
+    if high < 0 or starts[high] < timetag:
+        return high + 1
+    if starts[0] >= timetag:
+        return 0
+    low = 0  # from here on starts[low] < timetag <= starts[high]
+    step = 1
+    while high - low > 1:
+        probe = high - step
+        if probe <= low:
+            break
+        if starts[probe] < timetag:
+            low = probe
+            break
+        high = probe
+        step <<= 1
+    while high - low > 1:
+        middle = (low + high) >> 1
+        if starts[middle] < timetag:
+            low = middle
+        else:
+            high = middle
+    return high
+
+
+def _creator(match: object, start: int) -> tuple:
+    """The timetag and first index of the match's oldest WME newer than ``start`` (its
+    newest WME when none is). (The kernel-order keys are plain tuples: mypyc would unpack
+    a ``tuple[int, int]`` into a C struct and box it anew at every use.)"""
+    found: tuple = match.newest  # type: ignore[attr-defined]
+    newest: int = found[0]
+    if newest <= start:
+        return found
+    oldest, index = newest, -1
+    wmes: tuple[WME | None, ...] = match.wmes  # type: ignore[attr-defined]
+    for i, wme in enumerate(wmes):
+        if wme is not None:
+            timetag: int = wme.timetag
+            if start < timetag < oldest:
+                oldest, index = timetag, i
+    return found if index < 0 else (oldest, index)
+
+
+def _shared(firsts: list[tuple]) -> set[tuple]:
+    """The keys that occur more than once (none, usually)."""
+    if len(firsts) == 2:
+        return {firsts[0]} if firsts[0] == firsts[1] else set()
+    seen: set[tuple] = set()
+    shared: set[tuple] = set()
+    for first in firsts:
+        if first in seen:
+            shared.add(first)
+        seen.add(first)
+    return shared
 
 
 def _creation_key(ranks: list[tuple[int, int]], sign: int) -> tuple:

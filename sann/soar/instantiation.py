@@ -362,12 +362,30 @@ class _RhsCompiler:
             out.append(f"{ind}    raise Abandoned")
         temp = f"t{self.temps}"
         self.temps += 1
-        out.append(f"{ind}{temp} = {self._const(function)}(agent, [{', '.join(args)}])")
+        generic = f"{self._const(function)}(agent, [{', '.join(args)}])"
+        if call.name in ("+", "-") and len(args) == 2:
+            self._int_arithmetic(call, args, temp, generic, out, ind)
+        else:
+            out.append(f"{ind}{temp} = {generic}")
         if check:
             message = f"({call.name}) returns no value"
             out.append(f"{ind}if {temp} is None:")
             out.append(f"{ind}    raise SoarRuntimeError({self._const(message)})")
         return temp
+
+    @staticmethod
+    def _int_arithmetic(call: FuncCall, args: list[str], temp: str, generic: str,
+                        out: list[str], ind: str) -> None:
+        """``(+ a b)`` or ``(- a b)`` of two integers (``(+ <k> 1)``, the usual counter)
+        without the generic function's argument list and calls: the result when it fits
+        the kernel's 64 bits. Anything else (a float, a non-number, an overflow) goes to the
+        generic function, which mixes, complains or wraps around as the kernel does."""
+        checks = [f"type({arg}) is int" for arg, node in zip(args, call.args, strict=True)
+                  if type(node) is not Const or type(node.value) is not int]
+        test = " and ".join(checks) or "True"
+        out.append(f"{ind}{temp} = {args[0]} {call.name} {args[1]} if {test} else None")
+        out.append(f"{ind}if {temp} is None or not {-(1 << 63)} <= {temp} < {1 << 63}:")
+        out.append(f"{ind}    {temp} = {generic}")
 
     def _evaluate_rest(self, args: Sequence[RhsValue], out: list[str], ind: str) -> None:
         """After a failed argument, the call's other arguments, for their errors and new
@@ -463,7 +481,8 @@ def is_o_supported(
     make_ids = info.make_ids
     if not make_ids:
         return False  # the kernel fires write/halt-only rules as i-assertions
-    bindings = match.bindings if match is not None else {}  # type: ignore[attr-defined]
+    bindings: dict[str, Symbol] = (
+        match.bindings if match is not None else {})  # type: ignore[attr-defined]
     if info.proposal_ids and _proposes_on_a_state(info, bindings):
         return False
     applies = elaborates = False

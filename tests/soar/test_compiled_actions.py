@@ -100,3 +100,38 @@ def test_errors_drop_only_their_action(monkeypatch: pytest.MonkeyPatch) -> None:
     ]
     assert host.text == ["hin1"]
     assert [(p.attr, p.value) for p in inst.prefs] == [("c", "n1")]
+
+
+@pytest.mark.parametrize("name", ["+", "-"])
+@pytest.mark.parametrize("x, y", [
+    (3, 1), (-5, 7), (2**63 - 1, 1), (-(2**63), 1), (2**63 - 1, -1), (1, 2.5), (1.5, 1),
+    ("a", 1), (1, "b"),
+])
+def test_integer_arithmetic_agrees_with_the_functions(name: str, x: object, y: object) -> None:
+    """The compiled fast path of ``(+ a b)`` and ``(- a b)`` (two integers whose result
+    fits in 64 bits) gives what the RHS functions give: the sum, or their wrap-around,
+    float or error otherwise; with a variable and an integer constant as in ``(+ <k> 1)``
+    too."""
+    from sann.soar.goals import Goal
+    from sann.soar.instantiation import Instantiation
+    from sann.soar.memory import Identifier
+    from sann.soar.preferences import Slot
+    from sann.soar.rhs import FUNCTIONS
+
+    state = Identifier("S", 1, 1)
+    goal = Goal(state, None, Slot(state, "operator", True))
+    for args in ((Var("x"), Var("y")), (Var("x"), Const(y))):
+        action = MakeAction(Var("s"), Const("a"), FuncCall(name, args))
+        inst = Instantiation("p", None, goal, (), False)
+        host = _Recorder()
+        program = compile_actions("p", (action,), frozenset({"s", "x", "y"}))
+        program(host, {"s": state, "x": x, "y": y}, inst, False, ())
+        try:
+            expected = [FUNCTIONS[name](host, [x, y])]
+        except Exception as error:  # noqa: BLE001 -- the function's own error, compared
+            assert host.errors == [str(error)]
+            assert inst.prefs == []
+            continue
+        values = [p.value for p in inst.prefs]
+        assert values == expected
+        assert [type(v) for v in values] == [type(v) for v in expected]
