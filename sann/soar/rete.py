@@ -618,9 +618,10 @@ class _Token:
     of a production-node token.  Hashed by identity.
 
     Slots, not a list: CPython 3.11 specializes slot reads and writes, not the subscripts of
-    a list subclass (three times slower), and the hot paths read tokens all the time.  The
-    generated code makes tokens inline (``_token_lines``): a call to ``__init__`` would cost
-    more than the six stores."""
+    a list subclass (three times slower), and the hot paths read tokens all the time.  No
+    ``__init__``: tokens are made by calling the bare class and storing the six slots
+    (inline in generated code, ``_token_lines``), cheaper than passing them to ``__init__``
+    and than ``object.__new__(_Token)``."""
 
     __slots__ = ("parent", "wme", "vals", "node", "children", "extra")
     parent: Any
@@ -636,7 +637,7 @@ _new = object.__new__
 
 def _new_token(parent: _Token | None, wme: object, vals: tuple, node: _Node,
                extra: object = None) -> _Token:
-    tok = _new(_Token)
+    tok = _Token()
     tok.parent, tok.wme, tok.vals, tok.node = parent, wme, vals, node
     tok.children = None
     tok.extra = extra
@@ -644,9 +645,9 @@ def _new_token(parent: _Token | None, wme: object, vals: tuple, node: _Node,
 
 
 def _token_lines(pad: str, parent: str, wme: str, vals: str) -> list[str]:
-    """Generated code: ``tok`` = a new token of node ``N`` (``NEW`` and ``Tok`` in the
-    namespace), what ``_new_token`` does, inline."""
-    return [f"{pad}tok = NEW(Tok); tok.parent = {parent}; tok.wme = {wme}; tok.vals = {vals}",
+    """Generated code: ``tok`` = a new token of node ``N`` (``Tok`` in the namespace), what
+    ``_new_token`` does, inline."""
+    return [f"{pad}tok = Tok(); tok.parent = {parent}; tok.wme = {wme}; tok.vals = {vals}",
             f"{pad}tok.node = N; tok.children = tok.extra = None"]
 
 
@@ -882,7 +883,7 @@ class _JoinNode(_Node):
     def _compile(self) -> None:
         hashed = self.pos >= 0
         namespace: dict[str, object] = {
-            **_CHECK_NAMES, "FLOAT": _FLOAT, "NEW": _new, "Tok": _Token, "N": self,
+            **_CHECK_NAMES, "FLOAT": _FLOAT, "Tok": _Token, "N": self,
             "E": self.extend, "R": self.registry, "T": self.tokens, "CH": self.children,
             "AB": self.amem.indexes[self.field] if hashed else self.amem.wmes,
             "PB": self.parent.indexes[self.pos] if hashed else self.parent.tokens,  # type: ignore[union-attr]
@@ -1282,7 +1283,7 @@ class _QueryNCCNode(_Node):
         among the owners, search once, then pass it on or keep the witness) and ``forget``
         (its undoing) as straight-line code, with the node's indices fixed in it."""
         namespace: dict[str, object] = {
-            "FLOAT": _FLOAT, "NEW": _new, "Tok": _Token, "N": self, "OWN": self.owners,
+            "FLOAT": _FLOAT, "Tok": _Token, "N": self, "OWN": self.owners,
             "T": self.tokens, "CH": self.children, "R": self.rete._wme_info,
             "SOLVE": self.solvers[0]}
         left = ["def left_activate(t):", "    vals = t.vals",
@@ -1449,7 +1450,7 @@ def _compile_run(node: _RunNode, seed: int) -> Callable:
     below a new parent token ``t``; otherwise ``right_activate(seed)``, the combinations in
     which member ``seed`` matches the WME just added, below every parent token it joins."""
     members = node.members
-    namespace: dict[str, object] = {**_CHECK_NAMES, "FLOAT": _FLOAT, "NEW": _new, "Tok": _Token,
+    namespace: dict[str, object] = {**_CHECK_NAMES, "FLOAT": _FLOAT, "Tok": _Token,
                                     "N": node, "R": node.registry, "T": node.tokens,
                                     "CH": node.children}
     if seed < 0:
