@@ -1228,7 +1228,7 @@ class _QueryNCCNode(_Node):
     it back to the query.  Conjunctive negations with a nested one keep the subnetwork."""
 
     __slots__ = ("levels", "width", "owners", "owner_index", "amems", "owner_tests",
-                 "seed_filters", "solvers", "left_activate", "forget")
+                 "seed_filters", "solvers", "left_activate", "forget", "recheck")
 
     def __init__(self, rete: Rete, parent: _Node, key: object, levels: list[tuple],
                  width: int, amems: list[_AlphaMemory],
@@ -1258,6 +1258,9 @@ class _QueryNCCNode(_Node):
         # generated on first use, and again after an index is added to the node's tokens
         self.left_activate: Callable[[_Token], None] = self._compile_then_left
         self.forget: Callable[[_Token], None] = self._compile_then_forget
+        # recheck(tok): the witness of a blocked token is gone: find another, or pass the
+        # token on
+        self.recheck: Callable[[_Token], None] = self._compile_then_recheck
 
     def all_tokens(self) -> list[_Token]:
         return list(self.owners.values())
@@ -1266,6 +1269,7 @@ class _QueryNCCNode(_Node):
         if pos not in self.indexes:
             self.left_activate = self._compile_then_left
             self.forget = self._compile_then_forget
+            self.recheck = self._compile_then_recheck
         return super().index(pos)
 
     # ----- parent tokens -----
@@ -1278,10 +1282,18 @@ class _QueryNCCNode(_Node):
         self._compile()
         self.forget(tok)
 
+    def _compile_then_recheck(self, tok: _Token) -> None:
+        self._compile()
+        self.recheck(tok)
+
     def _compile(self) -> None:
         """Generate ``left_activate`` (a parent token arrives: make its token, file it
-        among the owners, search once, then pass it on or keep the witness) and ``forget``
-        (its undoing) as straight-line code, with the node's indices fixed in it."""
+        among the owners, search once, then pass it on or keep the witness), ``forget``
+        (its undoing) and ``recheck`` (the witness of a blocked token is gone: drop it,
+        search again, then pass the token on or keep the new witness) as straight-line
+        code, with the node's indices fixed in it.  Generated, not compiled: they read and
+        write token slots, which compiled code reaches through the generic attribute
+        lookup."""
         namespace: dict[str, object] = {
             "FLOAT": _FLOAT, "Tok": _Token, "N": self, "OWN": self.owners,
             "T": self.tokens, "CH": self.children, "R": self.rete._wme_info,
@@ -1297,21 +1309,30 @@ class _QueryNCCNode(_Node):
             forget += _key_lines(f"vals[{pos}]", "    ", True) + [
                 f"    b = O{k}[key]", "    del b[tok]", f"    if not b: del O{k}[key]"]
         left += ["    found = SOLVE(vals, None)", "    if found is None:", "        T[tok] = None"]
+        recheck = ["def recheck(tok):", "    for w in tok.extra[1]:", "        record = R.get(w)",
+                   "        if record is not None and record[3]: record[3].pop(tok, None)",
+                   "    tok.extra = None", "    vals = tok.vals", "    found = SOLVE(vals, None)",
+                   "    if found is None:", "        T[tok] = None"]
         forget += ["    found = tok.extra", "    if found is None:", "        del T[tok]"]
         for k, (pos, index) in enumerate(self.index_list):
             namespace[f"I{k}"] = index
             left += _filing_lines(f"I{k}", f"vals[{pos}]", "tok", "        ", True)
+            recheck += _filing_lines(f"I{k}", f"vals[{pos}]", "tok", "        ", True)
             forget += _key_lines(f"vals[{pos}]", "        ", True) + [
                 f"        b = I{k}[key]", "        del b[tok]", f"        if not b: del I{k}[key]"]
+        witness = ["    tok.extra = found",  # blocked: register the witness
+                   "    for w in found[1]:", "        record = R[w]", "        s = record[3]",
+                   "        if s is None: record[3] = {tok: None}", "        else: s[tok] = None"]
         left += ["        for child in CH:", "            child.left_activate(tok)",
-                 "        return", "    tok.extra = found",  # blocked: register the witness
-                 "    for w in found[1]:", "        record = R[w]", "        s = record[3]",
-                 "        if s is None: record[3] = {tok: None}", "        else: s[tok] = None"]
+                 "        return", *witness]
+        recheck += ["        for child in CH:", "            child.left_activate(tok)",
+                    "        return", *witness]
         forget += ["        return", "    for w in found[1]:", "        record = R.get(w)",
                    "        if record is not None and record[3]: record[3].pop(tok, None)",
                    "    tok.extra = None"]
         self.left_activate = define(left, namespace, "left_activate")  # type: ignore[method-assign]
         self.forget = define(forget, dict(namespace), "forget")  # type: ignore[method-assign]
+        self.recheck = define(recheck, dict(namespace), "recheck")  # type: ignore[method-assign]
 
     def _witness(self, tok: _Token, found: tuple[tuple, tuple]) -> None:
         tok.extra = found
@@ -1323,27 +1344,10 @@ class _QueryNCCNode(_Node):
             else:
                 record[3][tok] = None
 
-    def _unwitness(self, tok: _Token) -> None:
-        info = self.rete._wme_info
-        for w in tok.extra[1]:
-            record = info.get(w)
-            if record is not None and record[3]:
-                record[3].pop(tok, None)
-        tok.extra = None
-
     def _block(self, tok: _Token, found: tuple[tuple, tuple]) -> None:
         self.unstore(tok)
         self.rete._delete_children(tok)
         self._witness(tok, found)
-
-    def recheck(self, tok: _Token) -> None:
-        """The witness of a blocked token is gone: find another, or pass the token on."""
-        self._unwitness(tok)
-        found = self.solvers[0](tok.vals, None)
-        if found is None:
-            self.store(tok)
-        else:
-            self._witness(tok, found)
 
     # ----- inner WME changes -----
 
