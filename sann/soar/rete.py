@@ -618,9 +618,10 @@ class _Token:
     of a production-node token.  Hashed by identity.
 
     Slots, not a list: CPython 3.11 specializes slot reads and writes, not the subscripts of
-    a list subclass (three times slower), and the hot paths read tokens all the time.  The
-    generated code makes tokens inline (``_token_lines``): a call to ``__init__`` would cost
-    more than the six stores."""
+    a list subclass (three times slower), and the hot paths read tokens all the time.  No
+    ``__init__``: tokens are made by calling the bare class and storing the six slots
+    (inline in generated code, ``_token_lines``), cheaper than passing them to ``__init__``
+    and than ``object.__new__(_Token)``."""
 
     __slots__ = ("parent", "wme", "vals", "node", "children", "extra")
     parent: Any
@@ -636,7 +637,7 @@ _new = object.__new__
 
 def _new_token(parent: _Token | None, wme: object, vals: tuple, node: _Node,
                extra: object = None) -> _Token:
-    tok = _new(_Token)
+    tok = _Token()
     tok.parent, tok.wme, tok.vals, tok.node = parent, wme, vals, node
     tok.children = None
     tok.extra = extra
@@ -644,9 +645,9 @@ def _new_token(parent: _Token | None, wme: object, vals: tuple, node: _Node,
 
 
 def _token_lines(pad: str, parent: str, wme: str, vals: str) -> list[str]:
-    """Generated code: ``tok`` = a new token of node ``N`` (``NEW`` and ``Tok`` in the
-    namespace), what ``_new_token`` does, inline."""
-    return [f"{pad}tok = NEW(Tok); tok.parent = {parent}; tok.wme = {wme}; tok.vals = {vals}",
+    """Generated code: ``tok`` = a new token of node ``N`` (``Tok`` in the namespace), what
+    ``_new_token`` does, inline."""
+    return [f"{pad}tok = Tok(); tok.parent = {parent}; tok.wme = {wme}; tok.vals = {vals}",
             f"{pad}tok.node = N; tok.children = tok.extra = None"]
 
 
@@ -882,7 +883,7 @@ class _JoinNode(_Node):
     def _compile(self) -> None:
         hashed = self.pos >= 0
         namespace: dict[str, object] = {
-            **_CHECK_NAMES, "FLOAT": _FLOAT, "NEW": _new, "Tok": _Token, "N": self,
+            **_CHECK_NAMES, "FLOAT": _FLOAT, "Tok": _Token, "N": self,
             "E": self.extend, "R": self.registry, "T": self.tokens, "CH": self.children,
             "AB": self.amem.indexes[self.field] if hashed else self.amem.wmes,
             "PB": self.parent.indexes[self.pos] if hashed else self.parent.tokens,  # type: ignore[union-attr]
@@ -1227,7 +1228,7 @@ class _QueryNCCNode(_Node):
     it back to the query.  Conjunctive negations with a nested one keep the subnetwork."""
 
     __slots__ = ("levels", "width", "owners", "owner_index", "amems", "owner_tests",
-                 "seed_filters", "solvers", "left_activate", "forget")
+                 "seed_filters", "solvers", "left_activate", "forget", "recheck")
 
     def __init__(self, rete: Rete, parent: _Node, key: object, levels: list[tuple],
                  width: int, amems: list[_AlphaMemory],
@@ -1257,6 +1258,9 @@ class _QueryNCCNode(_Node):
         # generated on first use, and again after an index is added to the node's tokens
         self.left_activate: Callable[[_Token], None] = self._compile_then_left
         self.forget: Callable[[_Token], None] = self._compile_then_forget
+        # recheck(tok): the witness of a blocked token is gone: find another, or pass the
+        # token on
+        self.recheck: Callable[[_Token], None] = self._compile_then_recheck
 
     def all_tokens(self) -> list[_Token]:
         return list(self.owners.values())
@@ -1265,6 +1269,7 @@ class _QueryNCCNode(_Node):
         if pos not in self.indexes:
             self.left_activate = self._compile_then_left
             self.forget = self._compile_then_forget
+            self.recheck = self._compile_then_recheck
         return super().index(pos)
 
     # ----- parent tokens -----
@@ -1277,12 +1282,20 @@ class _QueryNCCNode(_Node):
         self._compile()
         self.forget(tok)
 
+    def _compile_then_recheck(self, tok: _Token) -> None:
+        self._compile()
+        self.recheck(tok)
+
     def _compile(self) -> None:
         """Generate ``left_activate`` (a parent token arrives: make its token, file it
-        among the owners, search once, then pass it on or keep the witness) and ``forget``
-        (its undoing) as straight-line code, with the node's indices fixed in it."""
+        among the owners, search once, then pass it on or keep the witness), ``forget``
+        (its undoing) and ``recheck`` (the witness of a blocked token is gone: drop it,
+        search again, then pass the token on or keep the new witness) as straight-line
+        code, with the node's indices fixed in it.  Generated, not compiled: they read and
+        write token slots, which compiled code reaches through the generic attribute
+        lookup."""
         namespace: dict[str, object] = {
-            "FLOAT": _FLOAT, "NEW": _new, "Tok": _Token, "N": self, "OWN": self.owners,
+            "FLOAT": _FLOAT, "Tok": _Token, "N": self, "OWN": self.owners,
             "T": self.tokens, "CH": self.children, "R": self.rete._wme_info,
             "SOLVE": self.solvers[0]}
         left = ["def left_activate(t):", "    vals = t.vals",
@@ -1296,21 +1309,30 @@ class _QueryNCCNode(_Node):
             forget += _key_lines(f"vals[{pos}]", "    ", True) + [
                 f"    b = O{k}[key]", "    del b[tok]", f"    if not b: del O{k}[key]"]
         left += ["    found = SOLVE(vals, None)", "    if found is None:", "        T[tok] = None"]
+        recheck = ["def recheck(tok):", "    for w in tok.extra[1]:", "        record = R.get(w)",
+                   "        if record is not None and record[3]: record[3].pop(tok, None)",
+                   "    tok.extra = None", "    vals = tok.vals", "    found = SOLVE(vals, None)",
+                   "    if found is None:", "        T[tok] = None"]
         forget += ["    found = tok.extra", "    if found is None:", "        del T[tok]"]
         for k, (pos, index) in enumerate(self.index_list):
             namespace[f"I{k}"] = index
             left += _filing_lines(f"I{k}", f"vals[{pos}]", "tok", "        ", True)
+            recheck += _filing_lines(f"I{k}", f"vals[{pos}]", "tok", "        ", True)
             forget += _key_lines(f"vals[{pos}]", "        ", True) + [
                 f"        b = I{k}[key]", "        del b[tok]", f"        if not b: del I{k}[key]"]
+        witness = ["    tok.extra = found",  # blocked: register the witness
+                   "    for w in found[1]:", "        record = R[w]", "        s = record[3]",
+                   "        if s is None: record[3] = {tok: None}", "        else: s[tok] = None"]
         left += ["        for child in CH:", "            child.left_activate(tok)",
-                 "        return", "    tok.extra = found",  # blocked: register the witness
-                 "    for w in found[1]:", "        record = R[w]", "        s = record[3]",
-                 "        if s is None: record[3] = {tok: None}", "        else: s[tok] = None"]
+                 "        return", *witness]
+        recheck += ["        for child in CH:", "            child.left_activate(tok)",
+                    "        return", *witness]
         forget += ["        return", "    for w in found[1]:", "        record = R.get(w)",
                    "        if record is not None and record[3]: record[3].pop(tok, None)",
                    "    tok.extra = None"]
         self.left_activate = define(left, namespace, "left_activate")  # type: ignore[method-assign]
         self.forget = define(forget, dict(namespace), "forget")  # type: ignore[method-assign]
+        self.recheck = define(recheck, dict(namespace), "recheck")  # type: ignore[method-assign]
 
     def _witness(self, tok: _Token, found: tuple[tuple, tuple]) -> None:
         tok.extra = found
@@ -1322,27 +1344,10 @@ class _QueryNCCNode(_Node):
             else:
                 record[3][tok] = None
 
-    def _unwitness(self, tok: _Token) -> None:
-        info = self.rete._wme_info
-        for w in tok.extra[1]:
-            record = info.get(w)
-            if record is not None and record[3]:
-                record[3].pop(tok, None)
-        tok.extra = None
-
     def _block(self, tok: _Token, found: tuple[tuple, tuple]) -> None:
         self.unstore(tok)
         self.rete._delete_children(tok)
         self._witness(tok, found)
-
-    def recheck(self, tok: _Token) -> None:
-        """The witness of a blocked token is gone: find another, or pass the token on."""
-        self._unwitness(tok)
-        found = self.solvers[0](tok.vals, None)
-        if found is None:
-            self.store(tok)
-        else:
-            self._witness(tok, found)
 
     # ----- inner WME changes -----
 
@@ -1449,7 +1454,7 @@ def _compile_run(node: _RunNode, seed: int) -> Callable:
     below a new parent token ``t``; otherwise ``right_activate(seed)``, the combinations in
     which member ``seed`` matches the WME just added, below every parent token it joins."""
     members = node.members
-    namespace: dict[str, object] = {**_CHECK_NAMES, "FLOAT": _FLOAT, "NEW": _new, "Tok": _Token,
+    namespace: dict[str, object] = {**_CHECK_NAMES, "FLOAT": _FLOAT, "Tok": _Token,
                                     "N": node, "R": node.registry, "T": node.tokens,
                                     "CH": node.children}
     if seed < 0:
