@@ -738,8 +738,9 @@ class _AlphaMemory:
             namespace[f"P{k}"], namespace[f"R{k}"] = parent_tokens, activate
             add.append(f"    if P{k}: R{k}(wme)")
         for k, (node, level) in enumerate(self.listeners):
-            namespace[f"O{k}"], namespace[f"L{k}"] = node.owners, node.inner_added
-            add.append(f"    if O{k}: L{k}({level}, wme)")
+            # the node's inner_added, read at each call: it is regenerated with the node
+            namespace[f"O{k}"], namespace[f"L{k}"] = node.owners, node
+            add.append(f"    if O{k}: L{k}.inner_added({level}, wme)")
         self.on_add = define(add, namespace, "on_add")  # type: ignore[method-assign]
         self.on_remove = define(remove, dict(namespace), "on_remove")  # type: ignore[method-assign]
 
@@ -1228,7 +1229,8 @@ class _QueryNCCNode(_Node):
     it back to the query.  Conjunctive negations with a nested one keep the subnetwork."""
 
     __slots__ = ("levels", "width", "owners", "owner_index", "amems", "owner_tests",
-                 "seed_filters", "solvers", "left_activate", "forget", "recheck")
+                 "seed_filters", "solvers", "left_activate", "forget", "recheck",
+                 "inner_added")
 
     def __init__(self, rete: Rete, parent: _Node, key: object, levels: list[tuple],
                  width: int, amems: list[_AlphaMemory],
@@ -1261,6 +1263,8 @@ class _QueryNCCNode(_Node):
         # recheck(tok): the witness of a blocked token is gone: find another, or pass the
         # token on
         self.recheck: Callable[[_Token], None] = self._compile_then_recheck
+        # inner_added(k, wme): wme entered the memory of inner condition k (see _compile)
+        self.inner_added: Callable[[int, WME], None] = self._compile_then_inner_added
 
     def all_tokens(self) -> list[_Token]:
         return list(self.owners.values())
@@ -1270,6 +1274,7 @@ class _QueryNCCNode(_Node):
             self.left_activate = self._compile_then_left
             self.forget = self._compile_then_forget
             self.recheck = self._compile_then_recheck
+            self.inner_added = self._compile_then_inner_added
         return super().index(pos)
 
     # ----- parent tokens -----
@@ -1286,14 +1291,18 @@ class _QueryNCCNode(_Node):
         self._compile()
         self.recheck(tok)
 
+    def _compile_then_inner_added(self, k: int, wme: WME) -> None:
+        self._compile()
+        self.inner_added(k, wme)
+
     def _compile(self) -> None:
         """Generate ``left_activate`` (a parent token arrives: make its token, file it
         among the owners, search once, then pass it on or keep the witness), ``forget``
-        (its undoing) and ``recheck`` (the witness of a blocked token is gone: drop it,
-        search again, then pass the token on or keep the new witness) as straight-line
-        code, with the node's indices fixed in it.  Generated, not compiled: they read and
-        write token slots, which compiled code reaches through the generic attribute
-        lookup."""
+        (its undoing), ``recheck`` (the witness of a blocked token is gone: drop it,
+        search again, then pass the token on or keep the new witness) and ``inner_added``
+        (see ``_inner_added_lines``) as straight-line code, with the node's indices fixed
+        in it.  Generated, not compiled: they read and write token slots, which compiled
+        code reaches through the generic attribute lookup."""
         namespace: dict[str, object] = {
             "FLOAT": _FLOAT, "Tok": _Token, "N": self, "OWN": self.owners,
             "T": self.tokens, "CH": self.children, "R": self.rete._wme_info,
@@ -1320,9 +1329,7 @@ class _QueryNCCNode(_Node):
             recheck += _filing_lines(f"I{k}", f"vals[{pos}]", "tok", "        ", True)
             forget += _key_lines(f"vals[{pos}]", "        ", True) + [
                 f"        b = I{k}[key]", "        del b[tok]", f"        if not b: del I{k}[key]"]
-        witness = ["    tok.extra = found",  # blocked: register the witness
-                   "    for w in found[1]:", "        record = R[w]", "        s = record[3]",
-                   "        if s is None: record[3] = {tok: None}", "        else: s[tok] = None"]
+        witness = _witness_lines("    ")
         left += ["        for child in CH:", "            child.left_activate(tok)",
                  "        return", *witness]
         recheck += ["        for child in CH:", "            child.left_activate(tok)",
@@ -1333,6 +1340,76 @@ class _QueryNCCNode(_Node):
         self.left_activate = define(left, namespace, "left_activate")  # type: ignore[method-assign]
         self.forget = define(forget, dict(namespace), "forget")  # type: ignore[method-assign]
         self.recheck = define(recheck, dict(namespace), "recheck")  # type: ignore[method-assign]
+        namespace = {**_CHECK_NAMES, "FLOAT": _FLOAT, "N": self, "OWN": self.owners,
+                     "T": self.tokens, "R": self.rete._wme_info, "SAME": same_symbol,
+                     "DT": self.rete._delete_tokens}
+        self.inner_added = define(  # type: ignore[method-assign]
+            self._inner_added_lines(namespace), namespace, "inner_added")
+
+    def _inner_added_lines(self, namespace: dict[str, object]) -> list[str]:
+        """Generated ``inner_added(k, wme)``: ``wme`` entered the memory of inner condition
+        k.  Negated: the witnesses it rejects (of the tokens whose values it could join)
+        are no longer results, and their tokens are searched again.  Positive: unless a
+        seed filter rules it out, each unblocked token it could join is searched with it
+        as inner condition k; a match blocks the token (dropped from the memory, its
+        descendants deleted, the match kept as its witness)."""
+        lines = ["def inner_added(k, wme):"]
+        fields = {getter: field for field, getter in _GET.items()}
+        for k, level in enumerate(self.levels):
+            lines.append(f"    if k == {k}:")
+            pad = "        "
+            if not level[6]:
+                for n, (getter, index) in enumerate(self.seed_filters[k]):
+                    field = fields[getter]
+                    namespace[f"F{k}_{n}"] = index
+                    lines += _key_lines(f"wme.{field}", pad, field != "id")
+                    lines.append(f"{pad}if key not in F{k}_{n}: return")
+            tests = [(field, p) for field, p in level[7] if p < self.width]
+            if not tests:
+                lines.append(f"{pad}candidates = list(OWN.values())")
+            else:
+                field, p = tests[0]
+                namespace[f"Q{p}"] = self.owner_index[p]
+                lines += _key_lines(f"wme.{field}", pad, field != "id")
+                lines += [f"{pad}found = Q{p}.get(key)", f"{pad}if not found: return"]
+                if len(tests) == 1:
+                    lines.append(f"{pad}candidates = list(found)")
+                else:
+                    rest = tests[1:]
+                    lines += [f"{pad}v{n} = wme.{field}" for n, (field, _) in enumerate(rest)]
+                    same = " and ".join(f"SAME(tok.vals[{p}], v{n})"
+                                        for n, (_, p) in enumerate(rest))
+                    lines.append(f"{pad}candidates = [tok for tok in found if {same}]")
+            lines.append(f"{pad}for tok in candidates:")
+            if level[6]:
+                pos, check = level[2], level[4]
+                lines += [f"{pad}    found = tok.extra",
+                          f"{pad}    if found is None or tok.node is None: continue",
+                          f"{pad}    vals = found[0]"]
+                if pos >= 0:
+                    lines += [f"{pad}    x = vals[{pos}]; y = wme.{level[7][0][0]}",
+                              f"{pad}    if not (x.__class__ is y.__class__ and x == y): "
+                              "continue"]
+                if check is not None:
+                    lines += _check_lines(check.specs, "vals", "wme", "continue", pad + "    ")
+                lines += [f"{pad}    N.recheck(tok)", f"{pad}return"]
+                continue
+            namespace[f"S{k}"] = self.solvers[k + 1]
+            inner = pad + "        "
+            lines += [f"{pad}    if tok.extra is None and tok.node is not None:",
+                      f"{pad}        found = S{k}(tok.vals, wme)",
+                      f"{pad}        if found is not None:",  # block it (see _block)
+                      f"{inner}    del T[tok]"]
+            for n, (pos, index) in enumerate(self.index_list):
+                namespace[f"I{n}"] = index
+                lines += _key_lines(f"tok.vals[{pos}]", inner + "    ", True) + [
+                    f"{inner}    b = I{n}[key]", f"{inner}    del b[tok]",
+                    f"{inner}    if not b: del I{n}[key]"]
+            lines += [f"{inner}    s = tok.children", f"{inner}    if s:",
+                      f"{inner}        tok.children = None", f"{inner}        DT(list(s))",
+                      *_witness_lines(inner + "    ")]
+            lines.append(f"{pad}return")
+        return lines
 
     def _witness(self, tok: _Token, found: tuple[tuple, tuple]) -> None:
         tok.extra = found
@@ -1367,31 +1444,6 @@ class _QueryNCCNode(_Node):
         return [tok for tok in found
                 if all(same_symbol(tok.vals[pos], value) for value, pos in rest)]
 
-    def inner_added(self, k: int, wme: WME) -> None:
-        if self.levels[k][6]:  # negated: the witnesses it matches are no longer results
-            _, _, pos, getter, check, _, _, _ = self.levels[k]
-            for tok in self._candidates(k, wme):
-                found = tok.extra
-                if found is None or tok.node is None:
-                    continue
-                vals = found[0]
-                if pos >= 0 and not same_symbol(vals[pos], getter(wme)):
-                    continue
-                if check is None or check(vals, wme):
-                    self.recheck(tok)
-            return
-        for getter, index in self.seed_filters[k]:
-            key = getter(wme)
-            if type(key) is float:
-                key = (_FLOAT, key)
-            if key not in index:
-                return  # joins with no WME of another inner condition: blocks nobody
-        for tok in self._candidates(k, wme):
-            if tok.extra is None and tok.node is not None:
-                found = self.solvers[k + 1](tok.vals, wme)
-                if found is not None:
-                    self._block(tok, found)
-
     def inner_removed(self, k: int, wme: WME) -> None:
         """A WME left a negated inner condition's memory: results may appear."""
         for tok in self._candidates(k, wme):
@@ -1399,6 +1451,14 @@ class _QueryNCCNode(_Node):
                 found = self.solvers[0](tok.vals, None)
                 if found is not None:
                     self._block(tok, found)
+
+
+def _witness_lines(pad: str) -> list[str]:
+    """Generated code: keep ``found`` as the witness of the blocked ``tok`` (what
+    ``_QueryNCCNode._witness`` does, inline; ``R`` is the Rete's WME records)."""
+    return [f"{pad}tok.extra = found", f"{pad}for w in found[1]:", f"{pad}    record = R[w]",
+            f"{pad}    s = record[3]", f"{pad}    if s is None: record[3] = {{tok: None}}",
+            f"{pad}    else: s[tok] = None"]
 
 
 def _seed_filters(levels: list[tuple], width: int, amems: list[_AlphaMemory],
