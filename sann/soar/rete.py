@@ -659,6 +659,29 @@ def _adopt(parent: _Token, tok: _Token) -> None:
         children[tok] = None
 
 
+class _CompileFirst:
+    """Stands in for a node's generated function until the node generates its code: the
+    first call runs the node's ``_compile`` (which replaces every stand-in) and then the
+    function it made. Nodes reset their functions to stand-ins when what the code was
+    generated from changes."""
+
+    __slots__ = ("node", "name")
+
+    def __init__(self, node: object, name: str) -> None:
+        self.node = node
+        self.name = name
+
+    def __call__(self, *args: object) -> None:
+        self.node._compile()  # type: ignore[attr-defined]
+        getattr(self.node, self.name)(*args)
+
+
+def _compile_first(node: object, *names: str) -> None:
+    """Set the node's generated functions ``names`` to stand-ins (``_CompileFirst``)."""
+    for name in names:
+        setattr(node, name, _CompileFirst(node, name))
+
+
 class _AlphaMemory:
     """The WMEs that pass one condition's constant tests, with hash indices on the fields
     the join nodes below test."""
@@ -682,8 +705,9 @@ class _AlphaMemory:
         self.listeners: list[tuple[_QueryNCCNode, int]] = []
         # What a WME entering (leaving) the memory does, generated from the above; compiled
         # on first use after any of them changes.
-        self.on_add: Callable[[WME], None] = self._compile_then_add
-        self.on_remove: Callable[[WME], None] = self._compile_then_remove
+        self.on_add: Callable[[WME], None]
+        self.on_remove: Callable[[WME], None]
+        _compile_first(self, "on_add", "on_remove")
 
     def link(self, node: _Node) -> None:
         """Add a successor in front: nodes are built top-down, and a descendant must be
@@ -709,16 +733,7 @@ class _AlphaMemory:
         self._stale()
 
     def _stale(self) -> None:
-        self.on_add = self._compile_then_add
-        self.on_remove = self._compile_then_remove
-
-    def _compile_then_add(self, wme: WME) -> None:
-        self._compile()
-        self.on_add(wme)
-
-    def _compile_then_remove(self, wme: WME) -> None:
-        self._compile()
-        self.on_remove(wme)
+        _compile_first(self, "on_add", "on_remove")
 
     def _compile(self) -> None:
         """Generate ``on_add`` and ``on_remove`` as straight-line code: store the WME in the
@@ -861,25 +876,17 @@ class _JoinNode(_Node):
         if index is not None:  # the hashes both activations look up
             amem.index(self.field)
             parent.index(self.pos)
-        self.left_activate: Callable[[_Token], None] = self._compile_then_left
-        self.right_activate: Callable[[WME], None] = self._compile_then_right
+        self.left_activate: Callable[[_Token], None]
+        self.right_activate: Callable[[WME], None]
+        _compile_first(self, "left_activate", "right_activate")
 
     def index(self, pos: int) -> dict:
         known = pos in self.indexes
         index = super().index(pos)
         if not known:  # the generated code updates the indices it knew of
-            self.left_activate = self._compile_then_left
-            self.right_activate = self._compile_then_right
+            _compile_first(self, "left_activate", "right_activate")
             self.amem._relink()  # it holds the right activation
         return index
-
-    def _compile_then_left(self, t: _Token) -> None:
-        self._compile()
-        self.left_activate(t)
-
-    def _compile_then_right(self, wme: WME) -> None:
-        self._compile()
-        self.right_activate(wme)
 
     def _compile(self) -> None:
         hashed = self.pos >= 0
@@ -1211,6 +1218,10 @@ def _compile_query(levels: list[tuple], seed: int,
     return define(lines, namespace, "solve")
 
 
+#: The query NCC node's generated functions (see _QueryNCCNode._compile).
+_QUERY_GENERATED = ("left_activate", "forget", "recheck", "inner_added")
+
+
 @mypyc_attr(native_class=False)  # methods and generated functions in the same places
 class _QueryNCCNode(_Node):
     """Conjunctive negation answered by a query over the alpha memories instead of a
@@ -1258,42 +1269,24 @@ class _QueryNCCNode(_Node):
             if tests:
                 self.owner_index.setdefault(tests[0][1], {})
         # generated on first use, and again after an index is added to the node's tokens
-        self.left_activate: Callable[[_Token], None] = self._compile_then_left
-        self.forget: Callable[[_Token], None] = self._compile_then_forget
+        self.left_activate: Callable[[_Token], None]
+        self.forget: Callable[[_Token], None]
         # recheck(tok): the witness of a blocked token is gone: find another, or pass the
         # token on
-        self.recheck: Callable[[_Token], None] = self._compile_then_recheck
+        self.recheck: Callable[[_Token], None]
         # inner_added(k, wme): wme entered the memory of inner condition k (see _compile)
-        self.inner_added: Callable[[int, WME], None] = self._compile_then_inner_added
+        self.inner_added: Callable[[int, WME], None]
+        _compile_first(self, *_QUERY_GENERATED)
 
     def all_tokens(self) -> list[_Token]:
         return list(self.owners.values())
 
     def index(self, pos: int) -> dict:
         if pos not in self.indexes:
-            self.left_activate = self._compile_then_left
-            self.forget = self._compile_then_forget
-            self.recheck = self._compile_then_recheck
-            self.inner_added = self._compile_then_inner_added
+            _compile_first(self, *_QUERY_GENERATED)
         return super().index(pos)
 
     # ----- parent tokens -----
-
-    def _compile_then_left(self, t: _Token) -> None:
-        self._compile()
-        self.left_activate(t)
-
-    def _compile_then_forget(self, tok: _Token) -> None:
-        self._compile()
-        self.forget(tok)
-
-    def _compile_then_recheck(self, tok: _Token) -> None:
-        self._compile()
-        self.recheck(tok)
-
-    def _compile_then_inner_added(self, k: int, wme: WME) -> None:
-        self._compile()
-        self.inner_added(k, wme)
 
     def _compile(self) -> None:
         """Generate ``left_activate`` (a parent token arrives: make its token, file it
@@ -1633,16 +1626,9 @@ class _ProductionNode(_Node):
         # the Rete's _Changes, whose dicts are emptied in place (never replaced)
         self.added = rete._changes.added
         self.removed = rete._changes.removed
-        self.left_activate: Callable[[_Token], None] = self._compile_then_left
-        self.forget: Callable[[_Token], None] = self._compile_then_forget
-
-    def _compile_then_left(self, t: _Token) -> None:
-        self._compile()
-        self.left_activate(t)
-
-    def _compile_then_forget(self, tok: _Token) -> None:
-        self._compile()
-        self.forget(tok)
+        self.left_activate: Callable[[_Token], None]
+        self.forget: Callable[[_Token], None]
+        _compile_first(self, "left_activate", "forget")
 
     def _compile(self) -> None:
         """Generate ``left_activate`` (make the Match and its token, report it) and
