@@ -25,5 +25,28 @@ def define(lines: list[str], namespace: dict[str, object], name: str,
 
     The function is taken out of its own globals: one that named itself there would be a
     reference cycle, left to the cyclic garbage collector when the code is regenerated."""
-    exec(compiled("\n".join(lines), filename), namespace)  # noqa: S102 -- our own plans only
+    _string_keyed(namespace)
+    exec(_fresh(compiled("\n".join(lines), filename)), namespace)  # noqa: S102 -- our own plans only
     return namespace.pop(name)  # type: ignore[return-value]
+
+
+def _string_keyed(namespace: dict[str, object]) -> None:
+    """Make ``namespace`` a dict of CPython's string-keys kind, in place.
+
+    Only such a globals dict lets the interpreter specialize the generated code's global
+    reads (``LOAD_GLOBAL_MODULE``, a version check and an index); any other kind leaves
+    every read to the generic lookup, several times slower.  A dict display of more than
+    five items in mypyc-compiled code is built presized, which is the general kind."""
+    items = list(namespace.items())
+    namespace.clear()
+    namespace.update(items)
+
+
+def _fresh(code: CodeType) -> CodeType:
+    """A copy of the module ``code`` whose functions have bytecode of their own.
+
+    The interpreter specializes a function's bytecode in place, for the globals it last ran
+    with; equal sources share one compiled code object, so the functions of two nodes made
+    from it would undo each other's specializations on every call."""
+    consts = tuple(c.replace() if isinstance(c, CodeType) else c for c in code.co_consts)
+    return code.replace(co_consts=consts)
