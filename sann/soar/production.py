@@ -194,9 +194,21 @@ def shape(item: object) -> object:
 
 def duplicate_key(production: Production) -> tuple:
     """What two duplicates share: the conditions' shapes in any order, the actions' in
-    order (see :func:`same_production`)."""
-    return (tuple(sorted(map(repr, map(shape, production.conditions)))),
-            shape(production.actions))
+    order (see :func:`same_production`). Worked out once per production object (by
+    identity: parsed rules are shared, so every agent loading them asks again)."""
+    hit = _DUPLICATE_KEYS.get(id(production))
+    if hit is not None and hit[0] is production:
+        return hit[1]
+    if len(_DUPLICATE_KEYS) >= _DUPLICATE_KEYS_SIZE:
+        _DUPLICATE_KEYS.clear()
+    key = (tuple(sorted(map(repr, map(shape, production.conditions)))),
+           shape(production.actions))
+    _DUPLICATE_KEYS[id(production)] = (production, key)
+    return key
+
+
+_DUPLICATE_KEYS: dict[int, tuple[Production, tuple]] = {}
+_DUPLICATE_KEYS_SIZE = 4096
 
 
 def same_production(a: Production, b: Production) -> bool:

@@ -2673,6 +2673,34 @@ def _same_alpha(one: Condition, other: Condition) -> bool:
     return not (type(a) is Const and type(b) is Const and not same_symbol(a.value, b.value))
 
 
+def _node_keys(reorder: Any, ordered: list) -> list[object]:
+    """The keys of the kernel's nodes for conditions in the kernel's order: their text with
+    the variables numbered in order of appearance, so that equal prefixes share nodes.
+    Worked out once per order (``reorder.kernel_conditions`` shares its lists)."""
+    hit = _NODE_KEYS.get(id(ordered))
+    if hit is not None and hit[0] is ordered:
+        return hit[1]
+    names: dict[str, str] = {}
+
+    def canonical(text: str) -> str:
+        return _KERNEL_VAR.sub(
+            lambda m: names.setdefault(m.group(0), f"<{len(names)}>"), text)
+
+    keys: list[object] = []
+    for kcond in ordered:
+        if kcond.is_ncc:
+            keys.append(("ncc", tuple(canonical(reorder.format_kcond(c)) for c in kcond.inner)))
+        else:
+            keys.append(canonical(reorder.format_kcond(kcond)))
+    if len(_NODE_KEYS) >= 4096:
+        _NODE_KEYS.clear()
+    _NODE_KEYS[id(ordered)] = (ordered, keys)
+    return keys
+
+
+_NODE_KEYS: dict[int, tuple[list, list[object]]] = {}
+
+
 class KernelOrder:
     """The kernel's node tree for the loaded productions (see above).  ``add`` gives, per
     written condition index of a positive condition, ``(kernel position, written indexes
@@ -2712,21 +2740,11 @@ class KernelOrder:
         for value in reorder._constants(production):
             self._ages.setdefault((type(value), value), len(self._ages))
         ordered = reorder.kernel_conditions(production, self._ages, {})
-        names: dict[str, str] = {}
-
-        def canonical(text: str) -> str:
-            return _KERNEL_VAR.sub(
-                lambda m: names.setdefault(m.group(0), f"<{len(names)}>"), text)
-
         path: list[tuple[_KernelNode, object, _KernelNode]] = []
         node, is_join = self._top, False
         joins: list[tuple[int, int, int]] = []  # (written index, kernel position, path length)
-        for position, kcond in enumerate(ordered):
-            if kcond.is_ncc:
-                key: object = ("ncc", tuple(canonical(reorder.format_kcond(c))
-                                            for c in kcond.inner))
-            else:
-                key = canonical(reorder.format_kcond(kcond))
+        for position, (kcond, key) in enumerate(zip(ordered, _node_keys(reorder, ordered),
+                                                    strict=True)):
             parent = node
             positive = not kcond.negated and not kcond.is_ncc
             if positive and is_join:
