@@ -163,11 +163,22 @@ def _name(ident: str, names: dict[str, str], counters: dict[str, itertools.count
 
 
 def _signatures(graph: Graph, rounds: int) -> dict[str, str]:
+    """Weisfeiler-Lehman refinement over the edges leaving and entering each identifier:
+    two identifiers with the same augmentations but different referrers (``T1`` and ``T3``
+    both ``^kind b``, only ``T1`` the value of ``(T2 ^link T1)``) get different signatures,
+    so that their order, and so the canonical names, does not fall to the walk's order."""
+    incoming: dict[str, list[tuple[str, Value, bool]]] = {ident: [] for ident in graph}
+    for ident, edges in graph.items():
+        for attr, value, acc in edges:
+            if value[0] == "id" and value[1] in incoming:
+                incoming[value[1]].append((ident, attr, acc))
     sig = {ident: ident[0] for ident in graph}
     for _ in range(rounds):
         new = {}
         for ident, edges in graph.items():
             parts = sorted(f"{_plain(a, sig)}|{_plain(v, sig)}|{int(acc)}" for a, v, acc in edges)
+            parts += sorted(f"<{sig[source]}|{_plain(a, sig)}|{int(acc)}"
+                            for source, a, acc in incoming[ident])
             digest = hashlib.sha1((sig[ident] + "\n" + "\n".join(parts)).encode()).hexdigest()
             new[ident] = ident[0] + digest[:16]
         sig = new
