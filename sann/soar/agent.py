@@ -50,7 +50,7 @@ from .production import (
     duplicate_key,
     same_production,
 )
-from .rete import KernelOrder, negation_matches
+from .rete import KernelOrder, negation_matches, prefix_tokens
 from .rhs import FUNCTIONS, format_value, kernel_random
 from .trace import print_identifier, symbol_text, trace_preference, trace_wme
 
@@ -507,6 +507,13 @@ class Agent:
         # _batch_of of the joins' birth timetags: it changes no more once asked for (a
         # later batch starts after every WME already made)
         self._born_batches: dict[int, int] = {}
+        # per kernel join (serial): when it was last linked (_join_link), a token of its
+        # parent memory (WMEs), the production and place it was looked up for, the
+        # _collects count of the look, and the batch that token went in (-1: there)
+        self._join_links: dict[int, tuple] = {}
+        self._collects = 0  # the takes of matcher changes so far (_collect_changes)
+        # working memory by attribute (_vkey), kept once _wmes_of needs it
+        self._by_attr: dict[object, dict[WME, None]] | None = None
         # WMEs added and removed since the last trace of working-memory changes (watch 4+)
         self._traced_adds = []
         self._traced_removes: list[WME] = []
@@ -609,6 +616,14 @@ class Agent:
         if self._neg_watch:
             self._check_negations(wme)
         self.matcher.add_wme(wme)
+        by_attr = self._by_attr
+        if by_attr is not None:
+            key = _vkey(attr)
+            bucket = by_attr.get(key)
+            if bucket is None:
+                by_attr[key] = {wme: None}
+            else:
+                bucket[wme] = None
         if self.trace_level >= 4:
             self._traced_adds.append(wme)
         return wme
@@ -624,6 +639,13 @@ class Agent:
             return
         del wm[timetag]
         self.matcher.remove_wme(wme)
+        by_attr = self._by_attr
+        if by_attr is not None:
+            key = _vkey(wme.attr)
+            bucket = by_attr[key]
+            del bucket[wme]
+            if not bucket:
+                del by_attr[key]
         value = wme.value
         if type(value) is Identifier and value.level is None:
             count = self._refs[value] - 1
@@ -986,9 +1008,12 @@ class Agent:
         node is activated first); firing then takes them newest first, like the kernel's
         match-set lists."""
         new, gone = self.matcher.take_changes()
+        self._collects += 1
         start, self._batch_start = self._batch_start, self._timetag
         if start != self._timetag:
             self._batch_starts.append(start)
+        if self._join_links and (new or gone):
+            self._check_links()
         if gone:
             self._retract_matches(gone, self.matcher.blocked_retractions)
         if new:
@@ -1243,24 +1268,100 @@ class Agent:
         link_batch = self._born_batches.get(born)
         if link_batch is None:
             link_batch = self._born_batches[born] = _batch_of(starts, born)
-        link_time = 0
-        link_place: tuple | None = None
-        for j in place[1]:
-            other_wme = wmes[j]
-            if other_wme is None:
-                continue
-            timetag: int = other_wme.timetag
-            if timetag > born:
-                batch = _batch_of(starts, timetag)
-                if batch > link_batch or (link_place is not None and batch == link_batch
-                                          and -timetag > link_time):
-                    link_batch, link_time, link_place = batch, -timetag, places[j]
-        linked = ((link_batch, _LATEST) if link_place is None
-                  else (link_batch, link_time, link_place[0], link_place[3]))
+        own = tuple([wmes[j] for j in place[1]])
+        linked = _token_link(place[1], own, places, born, link_batch, starts)
+        if linked[1] != _LATEST:  # else linked since it was made (its memory never emptied)
+            linked = self._join_link(match.production.name,  # type: ignore[attr-defined]
+                                     place, places, born, link_batch, own, linked)
         if not tokens:
             return (newest, place[0], linked, place[3])
         return (newest, place[0], linked, place[3],
                 *_token_order(wmes, place, self._batch_starts))
+
+    def _join_link(self, name: str, place: tuple, places: dict[int, tuple], born: int,
+                   born_batch: int, own: tuple, own_link: tuple) -> tuple:
+        """When the kernel's Rete last linked the join of ``place`` to its alpha memory
+        (right unlinking: a join whose parent memory is empty is unlinked, and relinked
+        when the memory gets a token), as a sort key (``_token_link`` of that token);
+        ``own``: the match's token of that memory (its WMEs there), ``own_link`` its key.
+
+        The memory's tokens are its prefix's partial matches in working memory. Looked up
+        the first time, the join was linked by the earliest of them; a record keeps that
+        while a token of the memory seen (``_check_links``) is still there, and when it
+        goes, the join stays linked if another token made by then is there (the kernel
+        adds a batch's WMEs before it removes any, so a token that replaces another keeps
+        the join linked). Measured in soar_sml, matching agent 8: op1x's ^stage join,
+        linked by the first (X1 ^p 1) token, keeps its place before op0x's while the ^p
+        WMEs are replaced one by one. A match whose token is gone (a retraction) was made
+        in the link on record if its token was in the memory then, else in its own."""
+        serial: int = place[3][0]
+        record = self._join_links.get(serial)
+        wm = self._wm
+        for wme in own:
+            if wme is not None and wm.get(wme.timetag) is not wme:  # gone now
+                if record is not None and record[4] != self._collects:
+                    gone = record[5]
+                    if gone < 0 or gone == len(self._batch_starts) or own_link[0] <= gone:
+                        return record[0]  # type: ignore[no-any-return]
+                return own_link
+        if record is not None and record[5] < 0:
+            return record[0]  # type: ignore[no-any-return]
+        tokens = self._memory_tokens(name, place)
+        starts = self._batch_starts
+        linked: tuple = own_link
+        witness = own
+        for token in tokens:
+            key = _token_link(place[1], token, places, born, born_batch, starts)
+            if record is not None and key[0] <= record[5]:  # there when the last one went
+                linked, witness = record[0], token
+                break
+            if key < linked:
+                linked = key
+        self._join_links[serial] = (linked, witness, name, place, self._collects, -1)
+        return linked
+
+    def _memory_tokens(self, name: str, place: tuple) -> list[tuple]:
+        """The tokens of the kernel's memory above the join of ``place`` (see
+        ``_join_link``), as the WMEs of the conditions ``place[1]``."""
+        ordered = self._kernel_order.ordered(name)
+        if ordered is None:
+            return []
+        return prefix_tokens(ordered, place[5], self._wmes_of, self._wm_list, place[1])
+
+    def _wm_list(self) -> list[WME]:
+        return list(self._wm.values())
+
+    def _check_links(self) -> None:
+        """After a batch of WME changes: mark the recorded joins (``_join_link``) whose
+        token on record lost a WME with this batch."""
+        wm = self._wm
+        batch = len(self._batch_starts)
+        for serial, record in self._join_links.items():
+            if record[5] >= 0:
+                continue
+            for wme in record[1]:
+                if wme is not None and wm.get(wme.timetag) is not wme:
+                    self._join_links[serial] = (*record[:5], batch)
+                    break
+
+    def _wmes_of(self, cond: Condition) -> list[WME]:
+        """The WMEs with the condition's attribute (all, when it is not a constant), from an
+        index of working memory by attribute kept from the first call on."""
+        index = self._by_attr
+        if index is None:
+            index = self._by_attr = {}
+            for wme in self._wm.values():
+                key = _vkey(wme.attr)
+                bucket = index.get(key)
+                if bucket is None:
+                    index[key] = {wme: None}
+                else:
+                    bucket[wme] = None
+        attr = cond.attr_test
+        if type(attr) is Const:
+            found = index.get(_vkey(attr.value))  # type: ignore[union-attr]
+            return list(found) if found is not None else []
+        return list(self._wm.values())
 
     def _schedule_retraction(self, inst: Instantiation) -> None:
         if inst.retracted:
@@ -2622,6 +2723,30 @@ def _creator(match: object, start: int) -> tuple:
             if start < timetag < oldest:
                 oldest, index = timetag, i
     return found if index < 0 else (oldest, index)
+
+
+def _token_link(order: tuple[int, ...], token: tuple, places: dict[int, tuple], born: int,
+                born_batch: int, starts: list[int]) -> tuple:
+    """The time a token (the WMEs of the written conditions ``order``) was made, as the
+    relinking key
+    of the join below its memory: the entry of its latest WME newer than the join, in the
+    order the kernel's Rete took them (batch after batch, a batch newest first), with that
+    WME's alpha memory and path (joins relinked by one WME go in the order it activated
+    them); ``(born_batch, _LATEST)`` when none is newer than the join."""
+    link_batch, link_time = born_batch, 0
+    link_place: tuple | None = None
+    for j, wme in zip(order, token, strict=True):
+        if wme is None:
+            continue
+        timetag: int = wme.timetag
+        if timetag > born:
+            batch = _batch_of(starts, timetag)
+            if batch > link_batch or (link_place is not None and batch == link_batch
+                                      and -timetag > link_time):
+                link_batch, link_time, link_place = batch, -timetag, places.get(j)
+    if link_place is None:
+        return (link_batch, _LATEST)
+    return (link_batch, link_time, link_place[0], link_place[3])
 
 
 def _shared(firsts: list[tuple]) -> set[tuple]:

@@ -2701,6 +2701,43 @@ def _node_keys(reorder: Any, ordered: list) -> list[object]:
 _NODE_KEYS: dict[int, tuple[list, list[object]]] = {}
 
 
+def prefix_tokens(ordered: list, count: int, pool: Callable[[Condition], list[WME]],
+                  wm: Callable[[], list[WME]], order: tuple[int, ...]) -> list[tuple]:
+    """The tokens of the kernel's beta memory above its ``count``-th condition (in
+    ``ordered``, the kernel's order: ``reorder.KCond``s), as ``introspect`` counts partial
+    matches: each token as the WMEs of the positive conditions whose written indexes are
+    ``order``. ``pool``: the WMEs a condition may match (a superset: those with its
+    attribute), ``wm``: all of them (for negations)."""
+    tokens: list[tuple[dict[str, Symbol], dict[int, WME], list]] = [({}, {}, [])]
+    everything: list[WME] | None = None
+    for kcond in ordered[:count]:
+        element = kcond.element
+        if kcond.negated or kcond.is_ncc:
+            if everything is None:
+                everything = wm()
+            tokens = [t for t in tokens if not negation_matches(element, everything, t[0])]
+        else:
+            index: int = kcond.index
+            candidates = pool(element)
+            grown: list[tuple[dict[str, Symbol], dict[int, WME], list]] = []
+            for bindings, by_index, pairs in tokens:
+                for wme in candidates:
+                    extended = _wme_fits(element, wme, bindings)
+                    if extended is None:
+                        continue
+                    fields = (wme.id, wme.attr, wme.value)
+                    if all(_test_holds(t, v, extended, final=False)
+                           for cond, values in pairs
+                           for t, v in zip(_fields(cond), values, strict=True)):
+                        taken = dict(by_index)
+                        taken.setdefault(index, wme)
+                        grown.append((extended, taken, [*pairs, (element, fields)]))
+            tokens = grown
+        if not tokens:
+            return []
+    return [tuple([by_index.get(j) for j in order]) for _, by_index, _ in tokens]
+
+
 class KernelOrder:
     """The kernel's node tree for the loaded productions (see above).  ``add`` gives, per
     written condition index of a positive condition, ``(kernel position, written indexes
@@ -2723,6 +2760,11 @@ class KernelOrder:
         self._top = _KernelNode(0, 0)
         self._paths: dict[str, list[tuple[_KernelNode, object, _KernelNode]]] = {}
         self._places: dict[str, dict[int, tuple]] = {}
+        self._ordered: dict[str, list] = {}
+
+    def ordered(self, name: str) -> list | None:
+        """The production's conditions in the kernel's order (``reorder.KCond``)."""
+        return self._ordered.get(name)
 
     def _node(self, parent: _KernelNode, key: object,
               path: list[tuple[_KernelNode, object, _KernelNode]], now: int) -> _KernelNode:
@@ -2740,6 +2782,7 @@ class KernelOrder:
         for value in reorder._constants(production):
             self._ages.setdefault((type(value), value), len(self._ages))
         ordered = reorder.kernel_conditions(production, self._ages, {})
+        self._ordered[production.name] = ordered
         path: list[tuple[_KernelNode, object, _KernelNode]] = []
         node, is_join = self._top, False
         joins: list[tuple[int, int, int]] = []  # (written index, kernel position, path length)
@@ -2796,6 +2839,7 @@ class KernelOrder:
 
     def remove(self, name: str) -> None:
         self._places.pop(name, None)
+        self._ordered.pop(name, None)
         for parent, key, node in reversed(self._paths.pop(name, [])):
             node.users -= 1
             if node.users <= 0:
