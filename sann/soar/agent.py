@@ -508,10 +508,12 @@ class Agent:
         # later batch starts after every WME already made)
         self._born_batches: dict[int, int] = {}
         # per kernel join (serial): when it was last linked (_join_link), a token of its
-        # parent memory (WMEs), the production and place it was looked up for, the
-        # _collects count of the look, and the batch that token went in (-1: there)
+        # parent memory (WMEs), the production and place it was looked up for, and the
+        # _collects count of the look
         self._join_links: dict[int, tuple] = {}
         self._collects = 0  # the takes of matcher changes so far (_collect_changes)
+        # the links of the joins whose memory _check_links found emptied, before
+        self._links_before: dict[int, tuple] = {}
         # working memory by attribute (_vkey), kept once _wmes_of needs it
         self._by_attr: dict[object, dict[WME, None]] | None = None
         # WMEs added and removed since the last trace of working-memory changes (watch 4+)
@@ -1014,6 +1016,8 @@ class Agent:
             self._batch_starts.append(start)
         if self._join_links and (new or gone):
             self._check_links()
+        elif self._links_before:
+            self._links_before = {}
         if gone:
             self._retract_matches(gone, self.matcher.blocked_retractions)
         if new:
@@ -1287,62 +1291,67 @@ class Agent:
 
         The memory's tokens are its prefix's partial matches in working memory. Looked up
         the first time, the join was linked by the earliest of them; a record keeps that
-        while a token of the memory seen (``_check_links``) is still there, and when it
-        goes, the join stays linked if another token made by then is there (the kernel
-        adds a batch's WMEs before it removes any, so a token that replaces another keeps
-        the join linked). Measured in soar_sml, matching agent 8: op1x's ^stage join,
-        linked by the first (X1 ^p 1) token, keeps its place before op0x's while the ^p
-        WMEs are replaced one by one. A match whose token is gone (a retraction) was made
-        in the link on record if its token was in the memory then, else in its own."""
+        link while the memory is not emptied (``_check_links``). Measured in soar_sml,
+        matching agent 8: op1x's ^stage join, linked by the first (X1 ^p 1) token, keeps
+        its place before op0x's while the ^p WMEs are replaced one by one. A match whose
+        token is gone (a retraction) was made in the link on record before this batch."""
         serial: int = place[3][0]
         record = self._join_links.get(serial)
         wm = self._wm
         for wme in own:
             if wme is not None and wm.get(wme.timetag) is not wme:  # gone now
+                before = self._links_before.get(serial)
+                if before is not None:
+                    return before  # type: ignore[no-any-return]
                 if record is not None and record[4] != self._collects:
-                    gone = record[5]
-                    if gone < 0 or gone == len(self._batch_starts) or own_link[0] <= gone:
-                        return record[0]  # type: ignore[no-any-return]
+                    return record[0]  # type: ignore[no-any-return]
                 return own_link
-        if record is not None and record[5] < 0:
+        if record is not None:
             return record[0]  # type: ignore[no-any-return]
-        tokens = self._memory_tokens(name, place)
         starts = self._batch_starts
         linked: tuple = own_link
-        witness = own
-        for token in tokens:
+        for token in self._memory_tokens(name, place, False):
             key = _token_link(place[1], token, places, born, born_batch, starts)
-            if record is not None and key[0] <= record[5]:  # there when the last one went
-                linked, witness = record[0], token
-                break
             if key < linked:
                 linked = key
-        self._join_links[serial] = (linked, witness, name, place, self._collects, -1)
+        self._join_links[serial] = (linked, own, name, place, self._collects)
         return linked
 
-    def _memory_tokens(self, name: str, place: tuple) -> list[tuple]:
+    def _memory_tokens(self, name: str, place: tuple, one: bool) -> list[tuple]:
         """The tokens of the kernel's memory above the join of ``place`` (see
-        ``_join_link``), as the WMEs of the conditions ``place[1]``."""
+        ``_join_link``), as the WMEs of the conditions ``place[1]`` (``one``: at most
+        one)."""
         ordered = self._kernel_order.ordered(name)
         if ordered is None:
             return []
-        return prefix_tokens(ordered, place[5], self._wmes_of, self._wm_list, place[1])
+        return prefix_tokens(ordered, place[5], self._wmes_of, self._wm_list, place[1], one)
 
     def _wm_list(self) -> list[WME]:
         return list(self._wm.values())
 
     def _check_links(self) -> None:
-        """After a batch of WME changes: mark the recorded joins (``_join_link``) whose
-        token on record lost a WME with this batch."""
+        """After a batch of WME changes: a recorded join (``_join_link``) whose token on
+        record lost a WME stays linked, with another token on record, if its memory still
+        has one (the kernel adds a batch's WMEs before it removes any, so a token that
+        replaces another keeps the memory from emptying), and is forgotten if not. The
+        links of the batch before are kept for ordering retractions."""
         wm = self._wm
-        batch = len(self._batch_starts)
+        if self._links_before:
+            self._links_before = {}
+        gone: list[int] = []
         for serial, record in self._join_links.items():
-            if record[5] >= 0:
-                continue
             for wme in record[1]:
                 if wme is not None and wm.get(wme.timetag) is not wme:
-                    self._join_links[serial] = (*record[:5], batch)
+                    gone.append(serial)
                     break
+        for serial in gone:
+            record = self._join_links[serial]
+            self._links_before[serial] = record[0]
+            tokens = self._memory_tokens(record[2], record[3], True)
+            if tokens:
+                self._join_links[serial] = (record[0], tokens[0], *record[2:])
+            else:
+                del self._join_links[serial]
 
     def _wmes_of(self, cond: Condition) -> list[WME]:
         """The WMEs with the condition's attribute (all, when it is not a constant), from an

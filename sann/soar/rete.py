@@ -2702,15 +2702,16 @@ _NODE_KEYS: dict[int, tuple[list, list[object]]] = {}
 
 
 def prefix_tokens(ordered: list, count: int, pool: Callable[[Condition], list[WME]],
-                  wm: Callable[[], list[WME]], order: tuple[int, ...]) -> list[tuple]:
+                  wm: Callable[[], list[WME]], order: tuple[int, ...], one: bool = False
+                  ) -> list[tuple]:
     """The tokens of the kernel's beta memory above its ``count``-th condition (in
     ``ordered``, the kernel's order: ``reorder.KCond``s), as ``introspect`` counts partial
     matches: each token as the WMEs of the positive conditions whose written indexes are
     ``order``. ``pool``: the WMEs a condition may match (a superset: those with its
-    attribute), ``wm``: all of them (for negations)."""
+    attribute), ``wm``: all of them (for negations); ``one``: at most one token."""
     tokens: list[tuple[dict[str, Symbol], dict[int, WME], list]] = [({}, {}, [])]
     everything: list[WME] | None = None
-    for kcond in ordered[:count]:
+    for k, kcond in enumerate(ordered[:count]):
         element = kcond.element
         if kcond.negated or kcond.is_ncc:
             if everything is None:
@@ -2732,6 +2733,10 @@ def prefix_tokens(ordered: list, count: int, pool: Callable[[Condition], list[WM
                         taken = dict(by_index)
                         taken.setdefault(index, wme)
                         grown.append((extended, taken, [*pairs, (element, fields)]))
+                        if one and k == count - 1:
+                            break
+                if one and grown and k == count - 1:
+                    break
             tokens = grown
         if not tokens:
             return []
