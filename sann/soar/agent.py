@@ -1075,12 +1075,13 @@ class Agent:
             return keys
         if len(joined) == 2:  # the usual tie: two joins, settled without the token order
             one, two = keys[joined[0]], keys[joined[1]]
-            if one[0] != two[0] or one[1] != two[1] or one[2] != two[2] or one[4] != two[4]:
+            if (one[0] != two[0] or one[1] != two[1] or one[2] != two[2]
+                    or one[4][0] != two[4][0]):
                 return keys
         joins: dict[tuple, list[int]] = {}
         for k in joined:
             key = keys[k]
-            joins.setdefault((key[0], key[1], key[2], key[4]), []).append(k)
+            joins.setdefault((key[0], key[1], key[2], key[4][0]), []).append(k)
         for members in joins.values():
             if len(members) > 1:
                 linked = min(keys[k][3] for k in members)
@@ -1279,7 +1280,7 @@ class Agent:
                                      place, places, born, link_batch, own, linked)
         if not tokens:
             return (newest, place[0], linked, place[3])
-        return (newest, place[0], linked, place[3],
+        return (newest, place[0], linked, (place[3][0],),
                 *_token_order(wmes, place, self._batch_starts))
 
     def _join_link(self, name: str, place: tuple, places: dict[int, tuple], born: int,
@@ -2794,9 +2795,22 @@ def _token_order(wmes: tuple, place: tuple, starts: list[int]) -> tuple:
     ``^count`` joined after them, fire the proposal of the older ``^thing`` first; items
     whose tokens one ``^box`` WME made fire in the order its ``^item`` WMEs entered). Its
     memories list items newest first: a right activation visits the parent's tokens latest
-    made first, a left activation the alpha memory's WMEs latest entered first."""
+    made first, a left activation the alpha memory's WMEs latest entered first; and each
+    token goes down to every child (newest first) before the next is made, so the key
+    alternates the path to the next join and the rank of that join's WME (depth first:
+    measured in soar_sml, (S1 ^go n) below the shared ^obj join makes pb of X2, pa of X2,
+    then pb of X1)."""
     before = [_entry_rank(wmes[j], starts) for j in place[1]]
-    return (*_creation_key(before, -1), *[_entry_rank(wmes[j], starts) for j in place[7]])
+    order: list[tuple] = [_creation_key(before, -1)]
+    steps: tuple = place[8]
+    for k in range(len(steps)):
+        step = steps[k]
+        if k & 1:  # a join below: its alpha memory's WMEs are visited latest entered first
+            wme = wmes[step]
+            order.append(_entry_rank(wme, starts) if wme is not None else (0, 0))
+        else:  # the path to the next join (children newest first)
+            order.append(step)
+    return tuple(order)
 
 
 def _proposes_on_a_state(prefs: list[Preference]) -> bool:

@@ -2752,8 +2752,11 @@ class KernelOrder:
     at the tail when the memory gets a token: its place is then the newest WME of the
     conditions before it, when that is newer than the join (``Agent._kernel_key``).  The
     tuple also holds the twin conditions, the condition's kernel position, when the
-    production was loaded (its matches of older WMEs were made then, in loading order) and
-    the written indexes of the positive conditions after it (``Agent._token_order``)."""
+    production was loaded (its matches of older WMEs were made then, in loading order),
+    the written indexes of the positive conditions after it, and the path below the join
+    cut at each positive join after it, with that join's written index in between: the
+    kernel passes each token down to every child before it makes the next, so the
+    matches one activation makes are ordered depth first (``Agent._token_order``)."""
 
     def __init__(self) -> None:
         from sann.soar import reorder
@@ -2821,8 +2824,17 @@ class KernelOrder:
                         | (4 if type(cond.value_test) is Const else 0))  # type: ignore[union-attr]
                 twins = tuple(j for j, _, _ in joins if j != index
                               and _same_alpha(cond, conditions[j]))  # type: ignore[arg-type]
+                # the path below the join cut at each positive join after it, with the
+                # written index of that join's condition (for the depth-first order)
+                steps: list[object] = []
+                start = length
+                for later, _, later_length in joins[k + 1:]:
+                    steps.append(tuple(below[start:later_length]))
+                    steps.append(later)
+                    start = later_length
+                steps.append(tuple(below[start:]))
                 places[index] = (mask, before, join.born, (join.serial, *below[length:]),
-                                 twins, position, pnode.born, after)
+                                 twins, position, pnode.born, after, tuple(steps))
         self._places[production.name] = places  # shared with the caller: see restart
         return places
 
@@ -2839,8 +2851,8 @@ class KernelOrder:
             node.born = 0
             stack.extend(node.children.values())
         for places in self._places.values():
-            for index, (mask, before, _, key, twins, position, _, after) in list(places.items()):
-                places[index] = (mask, before, 0, key, twins, position, 0, after)
+            for index, place in list(places.items()):
+                places[index] = (*place[:2], 0, *place[3:6], 0, *place[7:])
 
     def remove(self, name: str) -> None:
         self._places.pop(name, None)

@@ -235,3 +235,31 @@ def test_a_join_keeps_its_place_until_its_memory_empties(case: str, tmp_path) ->
     ours = writes(_our_trace(text, 12, 1))
     assert len(ours) >= 11  # pa and pb at stages 0-5 (no pb at stage 2 when emptied)
     assert ours == writes(_kernel_trace(text, 12, tmp_path, 1))
+
+
+# (S1 ^go n) right-activates the ^go join the two rules share (the kernel's order:
+# ^superstate nil, ^go, ^obj, then (<x> ^a|^b)); the ^obj join below it makes a token per
+# object, and each token goes to both children (pb's join, the newer, first) before the
+# next token is made: the kernel makes pb of X2, pa of X2, then pb of X1, so pb of X1
+# fires first (we made all of pb's matches, then pa's).
+DEPTH_FIRST = """
+sp {init (state <s> ^superstate nil -^stage) --> (<s> ^operator <o> + !) (<o> ^name init)}
+sp {init*a (state <s> ^operator.name init)
+   --> (<s> ^stage 0 ^obj <x1> <x2>) (<x1> ^b 1) (<x2> ^b 2 ^a 5)}
+sp {pa (state <s> ^superstate nil ^obj <x>) (<x> ^a <v>) (<s> ^go <g>)
+   --> (write |pa | <g> | | <v> (crlf))}
+sp {pb (state <s> ^superstate nil ^obj <x>) (<x> ^b <v>) (<s> ^go <g>)
+   --> (write |pb | <g> | | <v> (crlf))}
+sp {next (state <s> ^superstate nil ^stage <n> < 5) --> (<s> ^operator <o> + !) (<o> ^name next)}
+sp {next*a (state <s> ^operator.name next ^stage <n>) --> (<s> ^stage <n> - (+ <n> 1))}
+sp {go (state <s> ^superstate nil ^stage <n>) --> (<s> ^go <n>)}
+"""
+
+
+def test_tokens_below_a_shared_join_go_down_one_at_a_time(tmp_path) -> None:
+    def writes(trace: str) -> list[str]:
+        return re.findall(r"p[ab] \d+ \d+", trace)
+
+    ours = writes(_our_trace(DEPTH_FIRST, 8, 1))
+    assert ours[:3] == ["pb 0 1", "pa 0 5", "pb 0 2"]
+    assert ours == writes(_kernel_trace(DEPTH_FIRST, 8, tmp_path, 1))
