@@ -1325,10 +1325,7 @@ class Agent:
         ordered = self._kernel_order.ordered(name)
         if ordered is None:
             return []
-        return prefix_tokens(ordered, place[5], self._wmes_of, self._wm_list, place[1], one)
-
-    def _wm_list(self) -> list[WME]:
-        return list(self._wm.values())
+        return prefix_tokens(ordered, place[5], self._wmes_of, place[1], one)
 
     def _check_links(self) -> None:
         """After a batch of WME changes: a recorded join (``_join_link``) whose token on

@@ -2702,21 +2702,24 @@ _NODE_KEYS: dict[int, tuple[list, list[object]]] = {}
 
 
 def prefix_tokens(ordered: list, count: int, pool: Callable[[Condition], list[WME]],
-                  wm: Callable[[], list[WME]], order: tuple[int, ...], one: bool = False
-                  ) -> list[tuple]:
+                  order: tuple[int, ...], one: bool = False) -> list[tuple]:
     """The tokens of the kernel's beta memory above its ``count``-th condition (in
     ``ordered``, the kernel's order: ``reorder.KCond``s), as ``introspect`` counts partial
     matches: each token as the WMEs of the positive conditions whose written indexes are
     ``order``. ``pool``: the WMEs a condition may match (a superset: those with its
-    attribute), ``wm``: all of them (for negations); ``one``: at most one token."""
+    attribute); ``one``: at most one token. The negations and conjunctive negations right
+    above the join are not tested: the kernel's negative and NCC nodes, which are then the
+    join's parent, keep the tokens they block in their memory too."""
+    while count and (ordered[count - 1].negated or ordered[count - 1].is_ncc):
+        count -= 1  # a negative or NCC node holds its blocked tokens too (no beta memory)
     tokens: list[tuple[dict[str, Symbol], dict[int, WME], list]] = [({}, {}, [])]
-    everything: list[WME] | None = None
     for k, kcond in enumerate(ordered[:count]):
         element = kcond.element
         if kcond.negated or kcond.is_ncc:
-            if everything is None:
-                everything = wm()
-            tokens = [t for t in tokens if not negation_matches(element, everything, t[0])]
+            inner: list[WME] = []
+            for cond in (element.conditions if kcond.is_ncc else (element,)):
+                inner += pool(cond)
+            tokens = [t for t in tokens if not negation_matches(element, inner, t[0])]
         else:
             index: int = kcond.index
             candidates = pool(element)
