@@ -508,8 +508,8 @@ class Agent:
         # later batch starts after every WME already made)
         self._born_batches: dict[int, int] = {}
         # per kernel join (serial): when it was last linked (_join_link), a token of its
-        # parent memory (WMEs), the production and place it was looked up for, and the
-        # _collects count of the look
+        # parent memory (WMEs), the production and place it was looked up for, the
+        # _collects count of the look, and the tokens of the memory seen since
         self._join_links: dict[int, tuple] = {}
         self._collects = 0  # the takes of matcher changes so far (_collect_changes)
         # the links of the joins whose memory _check_links found emptied, before
@@ -1290,12 +1290,15 @@ class Agent:
         when the memory gets a token), as a sort key (``_token_link`` of that token);
         ``own``: the match's token of that memory (its WMEs there), ``own_link`` its key.
 
-        The memory's tokens are its prefix's partial matches in working memory. Looked up
-        the first time, the join was linked by the earliest of them; a record keeps that
-        link while the memory is not emptied (``_check_links``). Measured in soar_sml,
-        matching agent 8: op1x's ^stage join, linked by the first (X1 ^p 1) token, keeps
-        its place before op0x's while the ^p WMEs are replaced one by one. A match whose
-        token is gone (a retraction) was made in the link on record before this batch."""
+        The memory's tokens are its prefix's partial matches in working memory; a record
+        keeps the earliest of those seen (the matches' own tokens: looking them all up
+        when the record is made cost the blocks planner a third more time, for one more
+        watch-3 trace of 150 random matching agents as the kernel's) while the memory is not emptied
+        (``_check_links``): a token seen there now was there since it was made. Measured
+        in soar_sml, matching agent 8: op1x's ^stage join, linked by the first (X1 ^p 1)
+        token, keeps its place before op0x's while the ^p WMEs are replaced one by one. A
+        match whose token is gone (a retraction) was made in the link on record before
+        this batch."""
         serial: int = place[3][0]
         record = self._join_links.get(serial)
         wm = self._wm
@@ -1308,15 +1311,15 @@ class Agent:
                     return record[0]  # type: ignore[no-any-return]
                 return own_link
         if record is not None:
+            seen: set[tuple] = record[5]
+            if own not in seen:
+                seen.add(own)
+                if own_link < record[0]:  # there now, so the memory was not empty since
+                    self._join_links[serial] = (own_link, *record[1:])
+                    return own_link
             return record[0]  # type: ignore[no-any-return]
-        starts = self._batch_starts
-        linked: tuple = own_link
-        for token in self._memory_tokens(name, place, False):
-            key = _token_link(place[1], token, places, born, born_batch, starts)
-            if key < linked:
-                linked = key
-        self._join_links[serial] = (linked, own, name, place, self._collects)
-        return linked
+        self._join_links[serial] = (own_link, own, name, place, self._collects, {own})
+        return own_link
 
     def _memory_tokens(self, name: str, place: tuple, one: bool) -> list[tuple]:
         """The tokens of the kernel's memory above the join of ``place`` (see
@@ -1329,10 +1332,11 @@ class Agent:
 
     def _check_links(self) -> None:
         """After a batch of WME changes: a recorded join (``_join_link``) whose token on
-        record lost a WME stays linked, with another token on record, if its memory still
-        has one (the kernel adds a batch's WMEs before it removes any, so a token that
-        replaces another keeps the memory from emptying), and is forgotten if not. The
-        links of the batch before are kept for ordering retractions."""
+        record lost a WME stays linked, with another token on record (one seen before, or
+        else one looked up in working memory), if its memory still has one (the kernel
+        adds a batch's WMEs before it removes any, so a token that replaces another keeps
+        the memory from emptying), and is forgotten if not. The links of the batch before
+        are kept for ordering retractions."""
         wm = self._wm
         if self._links_before:
             self._links_before = {}
@@ -1345,11 +1349,17 @@ class Agent:
         for serial in gone:
             record = self._join_links[serial]
             self._links_before[serial] = record[0]
-            tokens = self._memory_tokens(record[2], record[3], True)
-            if tokens:
-                self._join_links[serial] = (record[0], tokens[0], *record[2:])
+            seen = {token for token in record[5] if _all_there(token, wm)}
+            if seen:
+                witness = next(iter(seen))
             else:
-                del self._join_links[serial]
+                tokens = self._memory_tokens(record[2], record[3], True)
+                if not tokens:
+                    del self._join_links[serial]
+                    continue
+                witness = tokens[0]
+                seen.add(witness)
+            self._join_links[serial] = (record[0], witness, *record[2:5], seen)
 
     def _wmes_of(self, cond: Condition) -> list[WME]:
         """The WMEs with the condition's attribute (all, when it is not a constant), from an
@@ -2754,6 +2764,13 @@ def _token_link(order: tuple[int, ...], token: tuple, places: dict[int, tuple], 
     if link_place is None:
         return (link_batch, _LATEST)
     return (link_batch, link_time, link_place[0], link_place[3])
+
+
+def _all_there(wmes: tuple, wm: dict[int, WME]) -> bool:
+    for wme in wmes:
+        if wme is not None and wm.get(wme.timetag) is not wme:
+            return False
+    return True
 
 
 def _shared(firsts: list[tuple]) -> set[tuple]:
