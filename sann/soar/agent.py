@@ -1291,25 +1291,24 @@ class Agent:
         ``own``: the match's token of that memory (its WMEs there), ``own_link`` its key.
 
         The memory's tokens are its prefix's partial matches in working memory; a record
-        keeps the earliest of those seen (the matches' own tokens: looking them all up
-        when the record is made cost the blocks planner a third more time, for one more
-        watch-3 trace of 150 random matching agents as the kernel's) while the memory is not emptied
-        (``_check_links``): a token seen there now was there since it was made. Measured
+        keeps the earliest of those seen while the memory is not emptied (``_check_links``):
+        a token seen there now was there since it was made. Only the matches' own tokens
+        are seen: looking all of the memory's tokens up when a record is made cost the
+        blocks planner a third more time, for one more watch-3 trace of 150 random
+        matching agents as the kernel's. Measured
         in soar_sml, matching agent 8: op1x's ^stage join, linked by the first (X1 ^p 1)
         token, keeps its place before op0x's while the ^p WMEs are replaced one by one. A
         match whose token is gone (a retraction) was made in the link on record before
         this batch."""
         serial: int = place[3][0]
         record = self._join_links.get(serial)
-        wm = self._wm
-        for wme in own:
-            if wme is not None and wm.get(wme.timetag) is not wme:  # gone now
-                before = self._links_before.get(serial)
-                if before is not None:
-                    return before  # type: ignore[no-any-return]
-                if record is not None and record[4] != self._collects:
-                    return record[0]  # type: ignore[no-any-return]
-                return own_link
+        if not _all_there(own, self._wm):  # the token is gone now
+            before = self._links_before.get(serial)
+            if before is not None:
+                return before  # type: ignore[no-any-return]
+            if record is not None and record[4] != self._collects:
+                return record[0]  # type: ignore[no-any-return]
+            return own_link
         if record is not None:
             seen: set[tuple] = record[5]
             if own not in seen:
@@ -1340,12 +1339,8 @@ class Agent:
         wm = self._wm
         if self._links_before:
             self._links_before = {}
-        gone: list[int] = []
-        for serial, record in self._join_links.items():
-            for wme in record[1]:
-                if wme is not None and wm.get(wme.timetag) is not wme:
-                    gone.append(serial)
-                    break
+        gone = [serial for serial, record in self._join_links.items()
+                if not _all_there(record[1], wm)]
         for serial in gone:
             record = self._join_links[serial]
             self._links_before[serial] = record[0]
@@ -2745,11 +2740,10 @@ def _creator(match: object, start: int) -> tuple:
 def _token_link(order: tuple[int, ...], token: tuple, places: dict[int, tuple], born: int,
                 born_batch: int, starts: list[int]) -> tuple:
     """The time a token (the WMEs of the written conditions ``order``) was made, as the
-    relinking key
-    of the join below its memory: the entry of its latest WME newer than the join, in the
-    order the kernel's Rete took them (batch after batch, a batch newest first), with that
-    WME's alpha memory and path (joins relinked by one WME go in the order it activated
-    them); ``(born_batch, _LATEST)`` when none is newer than the join."""
+    relinking key of the join below its memory: the entry of its latest WME newer than
+    the join, in the order the kernel's Rete took them (batch after batch, a batch newest
+    first), with that WME's alpha memory and path (joins relinked by one WME go in the
+    order it activated them); ``(born_batch, _LATEST)`` when none is newer than the join."""
     link_batch, link_time = born_batch, 0
     link_place: tuple | None = None
     for j, wme in zip(order, token, strict=True):
@@ -2767,6 +2761,8 @@ def _token_link(order: tuple[int, ...], token: tuple, places: dict[int, tuple], 
 
 
 def _all_there(wmes: tuple, wm: dict[int, WME]) -> bool:
+    """Whether every WME of a token (``None``: a condition it has no WME for) is still in
+    working memory (by timetag)."""
     for wme in wmes:
         if wme is not None and wm.get(wme.timetag) is not wme:
             return False
@@ -2816,7 +2812,7 @@ def _token_order(wmes: tuple, place: tuple, starts: list[int]) -> tuple:
     then pb of X1)."""
     before = [_entry_rank(wmes[j], starts) for j in place[1]]
     order: list[tuple] = [_creation_key(before, -1)]
-    steps: tuple = place[8]
+    steps: tuple = place[7]
     for k in range(len(steps)):
         step = steps[k]
         if k & 1:  # a join below: its alpha memory's WMEs are visited latest entered first

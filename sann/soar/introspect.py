@@ -15,7 +15,7 @@ from .errors import SoarRuntimeError
 from .memory import WME, Identifier
 from .production import Condition, ConjunctiveNegation, Production
 from .reorder import KCond, format_kcond, kernel_conditions, positive_order, symbol_ages
-from .rete import _fields, _test_holds, _wme_fits, negation_matches
+from .rete import PartialMatch, _fields, _test_holds, join_condition, negation_matches
 from .trace import symbol_text, trace_wme
 
 if TYPE_CHECKING:
@@ -24,7 +24,7 @@ if TYPE_CHECKING:
 NONE, TIMETAGS, WMES = 0, 1, 2
 
 #: A partial match: the variable bindings and the (condition, WME) pairs joined so far.
-Token = tuple[dict, tuple[tuple[Condition, WME], ...]]
+Token = PartialMatch
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -195,28 +195,12 @@ def _marker(above: int, count: int) -> str:
 
 def _extend(kcond: KCond, tokens: list[Token], wm: list[WME]) -> list[Token]:
     """The tokens after one condition: joined with a positive one, filtered by a
-    negation; relational tests on variables bound only now are checked now, as the
-    kernel's Rete moves them."""
+    negation."""
     element = kcond.element
     if kcond.negated:
         return [t for t in tokens if not negation_matches(element, wm, t[0])]
     assert isinstance(element, Condition)
-    out: list[Token] = []
-    for bindings, pairs in tokens:
-        for wme in wm:
-            extended = _wme_fits(element, wme, bindings)
-            if extended is not None and _still_hold(pairs, extended):
-                out.append((extended, (*pairs, (element, wme))))
-    return out
-
-
-def _still_hold(pairs: tuple[tuple[Condition, WME], ...], bindings: dict) -> bool:
-    for cond, wme in pairs:
-        values = (wme.id, wme.attr, wme.value)
-        if not all(_test_holds(t, v, bindings, final=False)
-                   for t, v in zip(_fields(cond), values, strict=True)):
-            return False
-    return True
+    return join_condition(element, tokens, wm)
 
 
 def _left_right(kcond: KCond, tokens: list[Token], wm: list[WME], level: int,

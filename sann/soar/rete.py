@@ -469,6 +469,36 @@ def negation_matches(element: ConditionElement, wmes: list[WME],
     return next(brute_force_solutions(inner, wmes, bindings), None) is not None
 
 
+#: A partial match as the brute-force views build it: the bindings so far and the
+#: (condition, WME) pairs joined.
+PartialMatch = tuple[dict[str, Symbol], tuple[tuple[Condition, WME], ...]]
+
+
+def join_condition(cond: Condition, tokens: list[PartialMatch], wmes: Iterable[WME],
+                   first: bool = False) -> list[PartialMatch]:
+    """The partial matches ``tokens`` joined with a positive condition over ``wmes`` (in
+    that order); relational tests of the earlier pairs on variables bound only now are
+    checked now, as the kernel's Rete moves them. ``first``: stop at the first."""
+    out: list[PartialMatch] = []
+    for bindings, pairs in tokens:
+        for wme in wmes:
+            extended = _wme_fits(cond, wme, bindings)
+            if extended is not None and _still_hold(pairs, extended):
+                out.append((extended, (*pairs, (cond, wme))))
+                if first:
+                    return out
+    return out
+
+
+def _still_hold(pairs: tuple[tuple[Condition, WME], ...], bindings: dict[str, Symbol]) -> bool:
+    for cond, wme in pairs:
+        values = (wme.id, wme.attr, wme.value)
+        if not all(_test_holds(t, v, bindings, final=False)
+                   for t, v in zip(_fields(cond), values, strict=True)):
+            return False
+    return True
+
+
 class BruteForceMatcher:
     """Naive matcher: recomputes every production's matches from scratch when asked.
 
@@ -2712,7 +2742,8 @@ def prefix_tokens(ordered: list, count: int, pool: Callable[[Condition], list[WM
     join's parent, keep the tokens they block in their memory too."""
     while count and (ordered[count - 1].negated or ordered[count - 1].is_ncc):
         count -= 1  # a negative or NCC node holds its blocked tokens too (no beta memory)
-    tokens: list[tuple[dict[str, Symbol], dict[int, WME], list]] = [({}, {}, [])]
+    tokens: list[PartialMatch] = [({}, ())]
+    indexes: list[int] = []  # the written index of each positive condition joined
     for k, kcond in enumerate(ordered[:count]):
         element = kcond.element
         if kcond.negated or kcond.is_ncc:
@@ -2721,29 +2752,17 @@ def prefix_tokens(ordered: list, count: int, pool: Callable[[Condition], list[WM
                 inner += pool(cond)
             tokens = [t for t in tokens if not negation_matches(element, inner, t[0])]
         else:
-            index: int = kcond.index
-            candidates = pool(element)
-            grown: list[tuple[dict[str, Symbol], dict[int, WME], list]] = []
-            for bindings, by_index, pairs in tokens:
-                for wme in candidates:
-                    extended = _wme_fits(element, wme, bindings)
-                    if extended is None:
-                        continue
-                    fields = (wme.id, wme.attr, wme.value)
-                    if all(_test_holds(t, v, extended, final=False)
-                           for cond, values in pairs
-                           for t, v in zip(_fields(cond), values, strict=True)):
-                        taken = dict(by_index)
-                        taken.setdefault(index, wme)
-                        grown.append((extended, taken, [*pairs, (element, fields)]))
-                        if one and k == count - 1:
-                            break
-                if one and grown and k == count - 1:
-                    break
-            tokens = grown
+            tokens = join_condition(element, tokens, pool(element), one and k == count - 1)
+            indexes.append(kcond.index)
         if not tokens:
             return []
-    return [tuple([by_index.get(j) for j in order]) for _, by_index, _ in tokens]
+    found: list[tuple] = []
+    for _, pairs in tokens:
+        by_index: dict[int, WME] = {}
+        for index, (_, wme) in zip(indexes, pairs, strict=True):
+            by_index.setdefault(index, wme)
+        found.append(tuple([by_index.get(j) for j in order]))
+    return found
 
 
 class KernelOrder:
@@ -2756,10 +2775,10 @@ class KernelOrder:
     conditions before it, when that is newer than the join (``Agent._kernel_key``).  The
     tuple also holds the twin conditions, the condition's kernel position, when the
     production was loaded (its matches of older WMEs were made then, in loading order),
-    the written indexes of the positive conditions after it, and the path below the join
-    cut at each positive join after it, with that join's written index in between: the
-    kernel passes each token down to every child before it makes the next, so the
-    matches one activation makes are ordered depth first (``Agent._token_order``)."""
+    and the path below the join cut at each positive join after it, with that join's
+    written index in between: the kernel passes each token down to every child before it
+    makes the next, so the matches one activation makes are ordered depth first
+    (``Agent._token_order``)."""
 
     def __init__(self) -> None:
         from sann.soar import reorder
@@ -2820,8 +2839,6 @@ class KernelOrder:
             if index not in places:
                 join = path[length - 1][2]
                 before = tuple(dict.fromkeys(j[0] for j in joins[:k]))
-                after = tuple(j for j in dict.fromkeys(j[0] for j in joins[k + 1:])
-                              if j != index and j not in before)
                 cond = conditions[index]
                 mask = ((2 if type(cond.attr_test) is Const else 0)  # type: ignore[union-attr]
                         | (4 if type(cond.value_test) is Const else 0))  # type: ignore[union-attr]
@@ -2837,7 +2854,7 @@ class KernelOrder:
                     start = later_length
                 steps.append(tuple(below[start:]))
                 places[index] = (mask, before, join.born, (join.serial, *below[length:]),
-                                 twins, position, pnode.born, after, tuple(steps))
+                                 twins, position, pnode.born, tuple(steps))
         self._places[production.name] = places  # shared with the caller: see restart
         return places
 
