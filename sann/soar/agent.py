@@ -2708,7 +2708,9 @@ def _entry_rank(wme: WME, starts: list[int]) -> tuple[int, int]:
 def _batch_of(starts: list[int], timetag: int) -> int:
     """``bisect_left(starts, timetag)``: the batch of a WME (see ``_entry_rank``), in
     native integers (the bisect module compares Python objects, ten times slower), and
-    searched from the end, where the batches of the WMEs asked about mostly are."""
+    searched from both ends at once, doubling the steps, where the batches of the WMEs
+    asked about mostly are: the newest, and the structure made when the run began, whose
+    search from the end alone grew with the run (four batches a decision)."""
     high = len(starts) - 1
     if high < 0 or starts[high] < timetag:
         return high + 1
@@ -2724,6 +2726,13 @@ def _batch_of(starts: list[int], timetag: int) -> int:
             low = probe
             break
         high = probe
+        probe = low + step
+        if probe >= high:
+            break
+        if starts[probe] >= timetag:
+            high = probe
+            break
+        low = probe
         step <<= 1
     while high - low > 1:
         middle = (low + high) >> 1
