@@ -1029,12 +1029,15 @@ class Agent:
         first (measured: three ``(S1 ^x v)`` made by one firing each match one rule, whose
         firings come oldest WME first), so a match is made when its oldest WME of the batch
         enters, and the matches of older WMEs are made later; matches made by no new WME
-        (a removal unblocked them) come first, as before. See ``_kernel_key``."""
+        (a removal unblocked them) come last: the kernel removes a batch's WMEs after it
+        has added them all (measured in soar_sml, the collapsed hanoi: the ^upper-disk
+        that a move's removed ^above uncovers fires before the rejections that its new
+        ^last-moved makes). See ``_kernel_key``."""
         creators = [_creator(match, start) for match in new]
         firsts: list[tuple] = []
         for creator in creators:
             made: int = creator[0]
-            firsts.append((0, made) if made <= start else (1, -made))
+            firsts.append((2, made) if made <= start else (1, -made))
         if len(new) == 2:  # the usual case, without sorting
             one: tuple
             two: tuple
