@@ -33,6 +33,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PROGRAMS = {name: ROOT / "rules" / "classic" / f"hanoi-{name}.soar"
             for name in ("collapsed", "fast")}
 
+sys.path.insert(0, str(ROOT))  # this checkout's engine, not an installed one
 sys.path.insert(0, str(ROOT / "tests" / "soar" / "differential"))
 import kernel as oracle  # noqa: E402  (the differential harness owns the kernel's lifecycle)
 
