@@ -2752,35 +2752,41 @@ def prefix_token(ordered: list, count: int, candidates: Candidates,
     several multi-valued attributes of the state has thousands)."""
     while count and (ordered[count - 1].negated or ordered[count - 1].is_ncc):
         count -= 1  # a negative or NCC node holds its blocked tokens too (no beta memory)
-    rechecks = _rechecks(ordered)
     chosen: list[tuple[int, Condition, WME]] = []
-
-    def search(k: int, bindings: dict[str, Symbol]) -> bool:
-        if k == count:
-            return True
-        kcond = ordered[k]
-        element = kcond.element
-        if kcond.negated or kcond.is_ncc:
-            inner = element.conditions if kcond.is_ncc else (_positive(element),)
-            return not _exists(inner, bindings, candidates) and search(k + 1, bindings)
-        earlier = rechecks[k]
-        for wme in candidates(element, bindings):
-            extended = _wme_fits(element, wme, bindings)
-            if extended is None or (earlier and not _still_hold(
-                    tuple((chosen[j][1], chosen[j][2]) for j in earlier), extended)):
-                continue
-            chosen.append((kcond.index, element, wme))
-            if search(k + 1, extended):
-                return True
-            chosen.pop()
-        return False
-
-    if not search(0, {}):
+    if not _prefix_search(ordered, 0, count, {}, chosen, _rechecks(ordered), candidates):
         return None
     by_index: dict[int, WME] = {}
     for index, _, wme in chosen:
         by_index.setdefault(index, wme)
     return tuple([by_index.get(j) for j in order])
+
+
+def _prefix_search(ordered: list, k: int, count: int, bindings: dict[str, Symbol],
+                   chosen: list[tuple[int, Condition, WME]], rechecks: list[tuple[int, ...]],
+                   candidates: Candidates) -> bool:
+    """``prefix_token``'s search from condition ``k`` on, ``chosen`` the WMEs so far (a
+    function of its own: a nested one calling itself is a reference cycle, left to the
+    cyclic collector at every call)."""
+    if k == count:
+        return True
+    kcond = ordered[k]
+    element = kcond.element
+    if kcond.negated or kcond.is_ncc:
+        inner = element.conditions if kcond.is_ncc else (_positive(element),)
+        return (not _exists(inner, bindings, candidates)
+                and _prefix_search(ordered, k + 1, count, bindings, chosen, rechecks,
+                                   candidates))
+    earlier = rechecks[k]
+    for wme in candidates(element, bindings):
+        extended = _wme_fits(element, wme, bindings)
+        if extended is None or (earlier and not _still_hold(
+                tuple((chosen[j][1], chosen[j][2]) for j in earlier), extended)):
+            continue
+        chosen.append((kcond.index, element, wme))
+        if _prefix_search(ordered, k + 1, count, extended, chosen, rechecks, candidates):
+            return True
+        chosen.pop()
+    return False
 
 
 def _rechecks(ordered: list) -> list[tuple[int, ...]]:
@@ -2823,28 +2829,30 @@ def _exists(elements: tuple[ConditionElement, ...], bindings: dict[str, Symbol],
     positive conditions taken on a bound identifier first where one is."""
     positives = [e for e in elements if isinstance(e, Condition) and not e.negated]
     negations = [e for e in elements if not (isinstance(e, Condition) and not e.negated)]
-    pairs: list[tuple[Condition, WME]] = []
+    return _exists_search(positives, dict(bindings), [], negations, candidates)
 
-    def search(left: list[Condition], current: dict[str, Symbol]) -> bool:
-        if not left:
-            return (all(_final_tests_hold(cond, wme, current) for cond, wme in pairs)
-                    and not any(_exists(n.conditions if isinstance(n, ConjunctiveNegation)
-                                        else (_positive(n),), current, candidates)
-                                for n in negations))
-        pick = next((c for c in left if any(name in current
-                                            for name in equality_vars(c.id_test))), left[0])
-        rest = [c for c in left if c is not pick]
-        for wme in candidates(pick, current):
-            extended = _wme_fits(pick, wme, current)
-            if extended is None:
-                continue
-            pairs.append((pick, wme))
-            if search(rest, extended):
-                return True
-            pairs.pop()
-        return False
 
-    return search(positives, dict(bindings))
+def _exists_search(left: list[Condition], current: dict[str, Symbol],
+                   pairs: list[tuple[Condition, WME]], negations: list[ConditionElement],
+                   candidates: Candidates) -> bool:
+    """``_exists`` with the positive conditions ``left`` to match and ``pairs`` matched."""
+    if not left:
+        return (all(_final_tests_hold(cond, wme, current) for cond, wme in pairs)
+                and not any(_exists(n.conditions if isinstance(n, ConjunctiveNegation)
+                                    else (_positive(n),), current, candidates)  # type: ignore[arg-type]
+                            for n in negations))
+    pick = next((c for c in left if any(name in current
+                                        for name in equality_vars(c.id_test))), left[0])
+    rest = [c for c in left if c is not pick]
+    for wme in candidates(pick, current):
+        extended = _wme_fits(pick, wme, current)
+        if extended is None:
+            continue
+        pairs.append((pick, wme))
+        if _exists_search(rest, extended, pairs, negations, candidates):
+            return True
+        pairs.pop()
+    return False
 
 
 class KernelOrder:
