@@ -619,8 +619,18 @@ class Agent:
         if self._neg_watch:
             self._check_negations(wme)
         self.matcher.add_wme(wme)
-        if self._by_id is not None:
-            _file_wme(self._by_id, wme)
+        by_id = self._by_id
+        if by_id is not None:  # _file_wme, inline: every WME of a run is made here
+            slots = by_id.get(ident)
+            if slots is None:
+                by_id[ident] = {_vkey(attr): {wme: None}}
+            else:
+                key = _vkey(attr)
+                bucket = slots.get(key)
+                if bucket is None:
+                    slots[key] = {wme: None}
+                else:
+                    bucket[wme] = None
         if self.trace_level >= 4:
             self._traced_adds.append(wme)
         return wme
