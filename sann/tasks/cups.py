@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import ast
 import hashlib
+import io
 import json
 import os
 import time
@@ -163,12 +164,18 @@ class _SannBackend:
     def __init__(self, rules: Path) -> None:
         from sann.soar.agent import Agent
 
-        self.agent = Agent()
+        #: What the agent printed in its last run (its `write` output and the halt message):
+        #: kept for a reader who asks, never sent to standard output, which would flood the book.
+        self.transcript = io.StringIO()
+        self.agent = Agent(out=self.transcript)
         self.agent.source(str(rules))
 
     def run(self, scene: CupScene, targets: Sequence[int], cap: int) -> list[CupSequence]:
         agent = self.agent
         agent.init()
+        self.transcript.seek(0)
+        self.transcript.truncate()
+        errors = len(agent.errors)
         il = agent.input_link
         il.add("cap", cap)
         for t in targets:
@@ -179,6 +186,8 @@ class _SannBackend:
                 for v in value if isinstance(value, list) else [value]:
                     c.add(attr, v)
         agent.run()
+        if len(agent.errors) > errors:
+            raise RuntimeError("the planning rules failed: " + "; ".join(agent.errors[errors:]))
         out = []
         for attr, q in agent.output_link.children():
             if attr == "sequence":

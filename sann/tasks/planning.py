@@ -23,6 +23,7 @@ there (``targets_per_run``; the scene stays on the input-link meanwhile).
 
 from __future__ import annotations
 
+import io
 import math
 import os
 from collections.abc import Iterable, Sequence
@@ -134,13 +135,19 @@ class _SannBackend:
     def __init__(self, rules: Path) -> None:
         from sann.soar.agent import Agent
 
-        self.agent = Agent()
+        #: What the agent printed in its last run (its `write` output and the halt message):
+        #: kept for a reader who asks, never sent to standard output, which would flood the book.
+        self.transcript = io.StringIO()
+        self.agent = Agent(out=self.transcript)
         self.agent.source(str(rules))
 
     def run(self, rows: list[tuple], targets: Sequence[int], config: PlannerConfig
             ) -> list[PlanSequence]:
         agent = self.agent
         agent.init()
+        self.transcript.seek(0)
+        self.transcript.truncate()
+        errors = len(agent.errors)
         il = agent.input_link
         il.add("cap", config.cap)
         il.add("horizon", config.horizon)
@@ -159,6 +166,8 @@ class _SannBackend:
             for face, value in faces:
                 b.add(face, value)
         agent.run()
+        if len(agent.errors) > errors:
+            raise RuntimeError("the planning rules failed: " + "; ".join(agent.errors[errors:]))
         out = []
         for attr, q in agent.output_link.children():
             if attr == "sequence":
