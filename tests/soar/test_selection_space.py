@@ -284,3 +284,22 @@ def test_rhs_identifier_of_an_s_variable_is_named_i(tmp_path: Path) -> None:
     assert ours.wm == theirs.wm
     (made,) = [value for ident, attr, value, _ in ours.wm if (ident, attr) == ("S1", "|x|")]
     assert made.startswith("I")
+
+
+def test_conjunctive_negation_inside_a_conjunctive_negation_loads_and_matches(
+    tmp_path: Path,
+) -> None:
+    """``-{ ... -{ ... } }`` ("no item lacks a value"): loading it crashed in the kernel
+    order's node keys (ValueError from reorder.format_kcond)."""
+    path = tmp_path / "nested-ncc.soar"
+    path.write_text(
+        "sp {init (state <s> ^superstate nil) --> (<s> ^item 1 2 ^value <v>) (<v> ^n 1)}\n"
+        "sp {every-item-valued (state <s> ^superstate nil)\n"
+        "   -{(<s> ^item <i>) -{(<s> ^value <v>) (<v> ^n <i>)}} --> (write |all|)}\n"
+        "sp {add (state <s> ^value.n 1) --> (<s> ^value <v>) (<v> ^n 2)}\n")
+    theirs, ours = _both(path, decisions=2)
+    assert "Error" not in theirs.trace
+    assert (ours.output, ours.production_firings) == (theirs.output,
+                                                        theirs.production_firings)
+    # Once before init's items exist (vacuously), once when the last item gets its value.
+    assert ours.output == "allall"
