@@ -108,8 +108,10 @@ def test_a_tie_opens_a_selection_state_proposing_evaluate_operator(tmp_path: Pat
     [({"a": "success", "b": "failure", "c": "indifferent"}, "a"),
      ({"a": "failure", "b": "failure", "c": "indifferent"}, "c"),
      ({"a": "partial-success", "b": "success", "c": "indifferent"}, "b"),
-     ({"a": "partial-failure", "b": "failure", "c": "indifferent"}, "c")],
-    ids=["success-best", "failure-reject", "success-over-partial", "partial-failure-worst"],
+     ({"a": "partial-failure", "b": "failure", "c": "indifferent"}, "c"),
+     ({"b": "indifferent"}, "b")],
+    ids=["success-best", "failure-reject", "success-over-partial", "partial-failure-worst",
+         "dead-end-failure"],
 )  # fmt: skip
 def test_symbolic_verdicts_become_preferences(
     tmp_path: Path, verdicts: dict[str, str | int], chosen: str
