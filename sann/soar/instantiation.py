@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 
 from .codegen import define
 from .errors import SoarError, SoarRuntimeError
-from .memory import WME, Identifier, Symbol
+from .memory import WME, Identifier, Symbol, rhs_id_hint
 from .preferences import NATIVE, Preference, preference_type
 from .production import CallAction, Const, FuncCall, MakeAction, Production, RhsValue, Var
 from .rhs import FUNCTIONS, kernel_shown
@@ -193,7 +193,7 @@ def _value(
     if kind is Var:
         bound = bindings.get(value.name)  # type: ignore[union-attr]
         if bound is None:  # an unbound variable names a new identifier
-            bound = agent._new_id(value.name, inst.goal.level)  # type: ignore[attr-defined, union-attr]
+            bound = agent._new_id(rhs_id_hint(value.name), inst.goal.level)  # type: ignore[attr-defined, union-attr]
             bindings[value.name] = bound  # type: ignore[union-attr]
         return bound
     if kind is Const:
@@ -333,7 +333,8 @@ class _RhsCompiler:
                 local = self.locals[node.name] = f"v{len(self.locals)}"  # type: ignore[union-attr]
             if node.name not in self.bound:  # type: ignore[union-attr]
                 out.append(f"{ind}if {local} is None:")
-                out.append(f"{ind}    {local} = new_id({self._const(node.name)}, level)")  # type: ignore[union-attr]
+                hint = self._const(rhs_id_hint(node.name))  # type: ignore[union-attr]
+                out.append(f"{ind}    {local} = new_id({hint}, level)")
             return local
         if kind is Const:
             return self._const(node.value)  # type: ignore[union-attr]
