@@ -128,8 +128,8 @@ def _kernel_recorder(log: str, roots: Sequence[str], skip: Sequence[str]) -> Non
 def _kernel_code(log: Path, roots: Sequence[Path]) -> tuple[str, str]:
     """The hidden code run before the first cell and after the last."""
     source = inspect.getsource(_kernel_recorder)
-    start = (f"from __future__ import annotations\n{source}\n_kernel_recorder({str(log)!r}, {[str(r) for r in roots]!r}, "
-             f"{sorted(SKIP_PARTS)!r})\ndel _kernel_recorder\n")
+    call = f"_kernel_recorder({str(log)!r}, {[str(r) for r in roots]!r}, {sorted(SKIP_PARTS)!r})"
+    start = f"from __future__ import annotations\n{source}\n{call}\ndel _kernel_recorder\n"
     return start, "_sann_record_modules()\n"
 
 
