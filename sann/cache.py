@@ -43,6 +43,33 @@ def file_sha256(path: str | os.PathLike[str]) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
+def soar_code_sha256(path: str | os.PathLike[str]) -> str:
+    """Hex SHA-256 of a Soar file's text with its comments removed (a ``#`` outside ``|...|``
+    and ``"..."`` up to the end of its line: grammars/soar.lark ignores exactly these, and no
+    other token may hold a ``#``). Datasets are keyed on it, so that editing the comments of a
+    rule file, which cannot change a plan, does not plan every scene again."""
+    text = Path(path).read_text(encoding="utf-8")
+    code: list[str] = []
+    quote = ""
+    i = 0
+    while i < len(text):
+        c = text[i]
+        if quote:
+            code.append(text[i:i + 2] if c == "\\" else c)
+            i += 2 if c == "\\" else 1
+            quote = "" if c == quote else quote
+            continue
+        if c == "#":
+            end = text.find("\n", i)
+            i = len(text) if end < 0 else end
+            continue
+        if c in "|\"":
+            quote = c
+        code.append(c)
+        i += 1
+    return hashlib.sha256("".join(code).encode()).hexdigest()
+
+
 def make_key(description: dict) -> str:
     """A stable hex key for a JSON-serialisable description (sorted keys)."""
     text = json.dumps(description, sort_keys=True, separators=(",", ":"), default=str)
