@@ -12,9 +12,11 @@ and imports its own sources (``PYTHONPATH``). Three builds, in order:
 1. fresh: no execution cache, no dataset cache, no compiled engine (``--copy-engine`` copies
    this checkout's compiled engine when it was built from the same sources, to skip gcc);
 2. prose edit: one sentence added to a paragraph of ``book/networks.md``;
-3. rule edit: one comment line of ``rules/blocks.soar`` changed. The file's content changes,
-   so every chapter that read it executes again and every dataset planned with it is planned
-   again (their keys hold the file's sha256), as after any edit of the rules.
+3. rule edit: one comment line of ``rules/blocks.soar`` changed. The file changed, so every
+   chapter that read it executes again; the datasets planned with it are keyed on its code
+   without comments (``sann.cache.soar_code_sha256``) and come from the cache. An edit of a
+   production also plans the datasets again, which costs what the networks chapter costs in
+   the fresh build.
 
 It prints each build's wall and CPU seconds (this process's children: on a shared machine the
 wall time also counts other users), its ratio to the fresh build (the anchor, measured in the
