@@ -393,15 +393,24 @@ def cached(cache_path: Path, notebook: Any) -> Any | None:
         return None
 
 
-def _by_expected_time(chapters: Sequence[Chapter], cache_path: Path) -> list[Chapter]:
-    """Longest first (the times of earlier executions, kept in ``TIMINGS``), so that the
-    last chapter to finish is a short one; unknown chapters keep their order, first."""
+def _by_expected_time(chapters: Sequence[Chapter], cache_path: Path,
+                      first: Sequence[str] = ()) -> list[Chapter]:
+    """Longest first, so that the last chapter to finish is a short one: the chapters named
+    in ``first`` (by file stem) whose time is not known yet, then the other unknown ones,
+    then the known ones by the time their last execution took (``TIMINGS``)."""
     timings = _read_record(Path(cache_path) / TIMINGS) or {}
-    return sorted(chapters, key=lambda c: -timings.get(c.uri, float("inf")))
+
+    def rank(chapter: Chapter) -> tuple[int, float]:
+        stem = Path(chapter.uri).stem
+        if chapter.uri in timings:
+            return 2, -timings[chapter.uri]
+        return (0, list(first).index(stem)) if stem in first else (1, 0.0)
+
+    return sorted(chapters, key=rank)
 
 
 def prepare(chapters: Iterable[Chapter], cache_path: str | os.PathLike[str], jobs: int = 2,
-            logger: Any = None) -> Outcome:
+            logger: Any = None, first: Sequence[str] = ()) -> Outcome:
     """Make the cache hold a valid executed notebook for every chapter: drop stale entries,
     execute the missing chapters ``jobs`` at a time. Failed chapters are not cached."""
     cache_path = Path(cache_path)
@@ -414,7 +423,7 @@ def prepare(chapters: Iterable[Chapter], cache_path: str | os.PathLike[str], job
         else:
             outcome.cached.append(chapter.uri)
     if missing:
-        asyncio.run(_run_all(_by_expected_time(missing, cache_path), cache_path, jobs, env,
+        asyncio.run(_run_all(_by_expected_time(missing, cache_path, first), cache_path, jobs, env,
                              outcome, logger))
         timings_file = cache_path / TIMINGS
         timings = _read_record(timings_file) or {}
@@ -477,7 +486,8 @@ def _on_get_outdated(app: Any, env: Any, added: set, changed: set, removed: set)
                 if (c := _chapter(env, d, base)) is not None}
     cache_path = Path(env.mystnb_config.execution_cache_path)
     outcome = prepare(chapters.values(), cache_path, jobs=_jobs(),
-                      logger=lambda m: logger.info(f"[bookcache] {m}"))
+                      logger=lambda m: logger.info(f"[bookcache] {m}"),
+                      first=app.config.sann_bookcache_first)
     for uri, reason in outcome.dropped.items():
         logger.info(f"[bookcache] {_relative(Path(uri))}: cached outputs dropped, {reason}")
     if outcome.failed:
@@ -515,8 +525,10 @@ def _check_no_foreign_entries(app: Any, env: Any) -> None:
 
 def setup(app: Any) -> dict:
     """The Sphinx extension: conf.py lists ``sann.bookcache`` after ``myst_nb``.
-    ``sann_bookcache_roots``: the folders (relative to conf.py) whose files are inputs."""
+    ``sann_bookcache_roots``: the folders (relative to conf.py) whose files are inputs;
+    ``sann_bookcache_first``: the chapters to start first while their times are unknown."""
     app.add_config_value("sann_bookcache_roots", [str(ROOT)], "env")
+    app.add_config_value("sann_bookcache_first", [], "env")
     app.connect("env-get-outdated", _on_get_outdated)
     app.connect("env-updated", _check_no_foreign_entries)
     return {"parallel_read_safe": True, "parallel_write_safe": True}

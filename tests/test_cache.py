@@ -129,3 +129,31 @@ def test_a_comment_on_every_line_leaves_the_productions_and_the_hash(tmp_path: P
             for line in path.read_text().split("\n")))
         assert productions(commented) == productions(path), path.name
         assert cache.soar_code_sha256(commented) == cache.soar_code_sha256(path), path.name
+
+
+def _build_once_worker(directory: str, log: str) -> None:
+    def build() -> dict[str, np.ndarray]:
+        with open(log, "a") as fh:
+            fh.write("built\n")
+        import time
+
+        time.sleep(0.5)
+        return _arrays()
+
+    arrays, _ = cache.get_or_build("shared", {"n": 1}, build, directory=Path(directory))
+    assert arrays["x"].shape == (2, 3)
+
+
+def test_processes_missing_the_same_entry_build_it_once(tmp_path: Path) -> None:
+    import multiprocessing as mp
+
+    log = tmp_path / "builds.log"
+    ctx = mp.get_context("fork")
+    procs = [ctx.Process(target=_build_once_worker, args=(str(tmp_path), str(log)))
+             for _ in range(2)]
+    for p in procs:
+        p.start()
+    for p in procs:
+        p.join(30)
+    assert [p.exitcode for p in procs] == [0, 0]
+    assert log.read_text().split() == ["built"]
