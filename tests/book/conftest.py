@@ -35,6 +35,7 @@ def book_html() -> Path:
     env = {k: v for k, v in os.environ.items() if k != "JPY_SESSION_NAME"}
     with open(BUILD / ".build.lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
+        shutil.rmtree(BUILD / "html", ignore_errors=True)  # every page written again, as make does
         done = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=ROOT,
                               timeout=3600)
         if done.returncode != 0:  # a failed chapter must be read (and fail) again next time
