@@ -87,8 +87,9 @@ def _kernel_recorder(log: str, roots: Sequence[str], skip: Sequence[str]) -> Non
     def reads(mode: object, flags: object) -> bool:
         if isinstance(mode, str):
             return "r" in mode or ("+" in mode and "w" not in mode)
-        if isinstance(flags, int):
-            return flags & os.O_ACCMODE != os.O_WRONLY and not flags & os.O_TRUNC
+        if isinstance(flags, int):  # os.open; O_CREAT | O_EXCL makes a new (temporary) file
+            new = flags & os.O_CREAT and flags & os.O_EXCL
+            return flags & os.O_ACCMODE != os.O_WRONLY and not flags & os.O_TRUNC and not new
         return True
 
     def hook(event: str, args: tuple) -> None:
