@@ -167,12 +167,13 @@ def unchanged(path: Path, stamp: list | None) -> bool:
 def environment() -> str:
     """A fingerprint of what executes the chapters besides the project's files: the
     interpreter, every installed distribution's version and the SANN_* / PYTHONPATH
-    variables the kernel inherits."""
+    variables the kernel inherits (not SANN_BOOK_*, which say how to build, not what)."""
     from importlib import metadata
 
     dists = sorted({f"{d.metadata['Name']}=={d.version}" for d in metadata.distributions()})
     env = sorted((k, v) for k, v in os.environ.items()
-                 if k.startswith("SANN_") or k == "PYTHONPATH")
+                 if (k.startswith("SANN_") and not k.startswith("SANN_BOOK_"))
+                 or k == "PYTHONPATH")
     text = json.dumps([sys.version, os.path.realpath(sys.executable), dists, env])
     return hashlib.sha256(text.encode()).hexdigest()
 
