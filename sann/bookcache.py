@@ -505,7 +505,31 @@ def _on_get_outdated(app: Any, env: Any, added: set, changed: set, removed: set)
         if entry is None or shown.get("mtime") != entry.created.timestamp():
             again.append(docname)
     app.env.sann_bookcache_path = str(cache_path)
+    app.env.sann_bookcache_chapters = sorted(chapters)
     return [d for d in again if d not in added and d not in changed]
+
+
+def _write_executed(app: Any, env: Any) -> None:
+    """Write each chapter's executed notebook (outputs from the cache) to myst-nb's output
+    folder, ``jupyter_execute``: myst-nb writes the notebook it read there, without outputs,
+    when it reads a chapter from the cache."""
+    import nbformat
+    from jupyter_cache import get_cache
+
+    cache_path = getattr(env, "sann_bookcache_path", None)
+    if cache_path is None:
+        return
+    cache = get_cache(cache_path)
+    base = [Path(app.confdir, r) for r in app.config.sann_bookcache_roots]
+    folder = Path(env.mystnb_config.output_folder)
+    for docname in getattr(env, "sann_bookcache_chapters", []):
+        chapter = _chapter(env, docname, base)
+        if chapter is None or cached(Path(cache_path), chapter.notebook) is None:
+            continue
+        _, executed = cache.merge_match_into_notebook(chapter.notebook)
+        target = folder.joinpath(*f"{docname}.ipynb".split("/"))
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_text(nbformat.writes(executed), encoding="utf-8")
 
 
 def _check_no_foreign_entries(app: Any, env: Any) -> None:
@@ -533,4 +557,5 @@ def setup(app: Any) -> dict:
     app.add_config_value("sann_bookcache_first", [], "env")
     app.connect("env-get-outdated", _on_get_outdated)
     app.connect("env-updated", _check_no_foreign_entries)
+    app.connect("env-updated", _write_executed)
     return {"parallel_read_safe": True, "parallel_write_safe": True}

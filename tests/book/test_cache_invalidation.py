@@ -12,6 +12,7 @@ import sys
 import textwrap
 from pathlib import Path
 
+import nbformat
 import pytest
 from jupyter_cache import get_cache
 
@@ -114,6 +115,8 @@ def test_each_build_executes_exactly_the_chapters_whose_inputs_changed(book: Pat
     """One book through a series of edits (each build costs a Sphinx start and kernels)."""
     assert built(book) == ["a", "b", "c", "d"]
     assert "sp {a" in html(book, "a")
+    executed = nbformat.read(book / "book" / "_build" / "jupyter_execute" / "a.ipynb", 4)
+    assert "sp {a" in executed.cells[-1].outputs[0]["text"]
     # nothing changed: nothing is executed
     assert built(book) == []
     # a prose edit is rendered without executing
