@@ -15,7 +15,9 @@ executes the chapters itself, before Sphinx reads them, and makes the cache hone
   cached only when every cell succeeded; the entry is written before its record, so a crash
   in between leaves an entry without a record, which the next build removes.
 * Sphinx then reads every chapter from the cache (``nb_execution_mode = "cache"``), and is
-  told to re-read the chapters whose entries are newer than the doctrees it keeps.
+  told to re-read the chapters whose entries are newer than the doctrees it keeps; the
+  executed notebooks are written to ``jupyter_execute`` (myst-nb writes them without outputs
+  when it takes them from the cache).
 
 Not seen as inputs: files outside the repository (and ``$SANN_CACHE``) other than the
 installed distributions, and directory listings (a chapter that globs a directory notices a
