@@ -50,6 +50,7 @@ from .production import (
     duplicate_key,
     same_production,
 )
+from .results import find_results
 from .rete import KernelOrder, negation_matches, prefix_tokens
 from .rhs import FUNCTIONS, format_value, kernel_random
 from .trace import print_identifier, symbol_text, trace_preference, trace_wme
@@ -1445,6 +1446,8 @@ class Agent:
         if inst.goal.level > 1 and not any(p.live for p in inst.prefs):
             inst.goal.insts.pop(inst, None)
         if inst.is_justification:
+            if inst.source is not None and not any(p.live for p in inst.prefs):
+                inst.source.justified.pop(inst, None)
             if self._justification_index.get(inst.match) is inst:  # type: ignore[arg-type]
                 del self._justification_index[inst.match]  # type: ignore[arg-type]
             for key in self._neg_keys.pop(inst, ()):
@@ -1505,7 +1508,10 @@ class Agent:
         """Whether the slot already holds the same o-supported preference: the kernel then
         ignores a new one made on the top level (measured in soar_sml: '+ (S1 ^note x +
         :O ) (a) ALREADY SUPPORTED ON TOP LEVEL.  IGNORING.', and a later o-reject of x
-        removes only the older preference)."""
+        removes only the older preference). Only a top-level instantiation's preference
+        counts: a substate's own stays beside its justification's copy, which outlives it
+        (measured: ``(S1 ^x 1 :O) [level 2]`` does not make ``justify1``'s ignored, a
+        top-level rule's or an older justification's does)."""
         slots = self._slots.get(pref.id)
         attr = pref.attr
         slot = slots.get(attr if type(attr) is not float else (float, attr)) if slots else None
@@ -1515,7 +1521,8 @@ class Agent:
         value, referent = pref.value, pref.referent
         for old in bucket:  # 1 and 1.0 are different symbols: the types must agree too
             if (old.o_supported and old.value == value and type(old.value) is type(value)
-                    and old.referent == referent and type(old.referent) is type(referent)):
+                    and old.referent == referent and type(old.referent) is type(referent)
+                    and old.inst is not None and old.inst.goal.level == 1):
                 return True
         return False
 
@@ -2106,6 +2113,7 @@ class Agent:
                         self._emit_line(trace_preference("-", pref))
                     self._remove_preference(pref)
         goal.insts.clear()
+        self._drop_local_results(goal)
         traced = len(self._traced_removes)
         for wme in list(goal.items.values()) + list(goal.counts.values()) + goal.arch_wmes:
             self._remove_arch(wme)
@@ -2132,6 +2140,22 @@ class Agent:
         self._dead_ids.append(goal.id)
         if not self._in_wm_phase:
             self._working_memory_phase(diffs_last=True)
+
+    def _drop_local_results(self, goal: Goal) -> None:
+        """A result may link the substate's own identifiers (the state, its operators):
+        the justification's preferences on them go with the substate, the rest stay
+        (measured in soar_sml: ``(A1 ^local-copy S2)`` made a result of ``(S2 ^operator
+        O2 +)`` and ``(O2 ^name answer)``; removing S2 traces '- (S2 ^operator O2 +  :O )
+        (justify1)' and '- (O2 ^name answer +  :O ) (justify1)' after its own
+        instantiations' preferences)."""
+        level = goal.level
+        for just in goal.justified:
+            for pref in reversed(just.prefs):
+                if pref.live and self._level_of(pref.id) >= level:
+                    if self.trace_level >= 5:
+                        self._emit_line(trace_preference("-", pref))
+                    self._remove_preference(pref)
+        goal.justified.clear()
 
     def _trace_goal_removal(self, goal: Goal, start: int) -> None:
         """Put the removed goal's architecture WMEs (traced from ``start`` on) in the
@@ -2282,32 +2306,18 @@ class Agent:
                     self._gds_index.setdefault(wme, {})[goal] = None
 
     def _find_results(self, inst: Instantiation, level: int) -> list[Preference]:
-        results: list[Preference] = []
-        marked: set[int] = set()
-        frontier: list[Identifier] = []
-        for pref in inst.prefs:
-            if self._level_of(pref.id) < level:
-                results.append(pref)
-                marked.add(id(pref))
-                frontier.extend(self._ids_in(pref, self._level_of(pref.id)))
-        while frontier:
-            ident = frontier.pop()
-            for pref in inst.prefs:
-                if id(pref) not in marked and pref.id is ident:
-                    results.append(pref)
-                    marked.add(id(pref))
-                    frontier.extend(self._ids_in(pref, self._level_of(pref.id)))
-        return results
+        return find_results(inst, level, self._level_of, self._slots)
 
-    def _ids_in(self, pref: Preference, level: int) -> list[Identifier]:
-        """Identifiers a result links to; they are promoted to the result's level."""
-        out = []
-        for sym in (pref.value, pref.referent):
-            if isinstance(sym, Identifier) and sym.level is None:
-                if self._level_of(sym) > level:
+    def _promote(self, results: list[Preference]) -> None:
+        """Identifiers a result links to move up to the result's level (parents first:
+        ``results`` is the last found first), once the results have been backtraced: the
+        kernel backtraces a result made from local structure through that structure."""
+        for pref in reversed(results):
+            level = self._level_of(pref.id)
+            for sym in (pref.value, pref.referent):
+                if (isinstance(sym, Identifier) and sym.level is None
+                        and self._level_of(sym) > level):
                     self._level[sym] = level
-                    out.append(sym)
-        return out
 
     def _justify(self, inst: Instantiation, results: list[Preference]) -> None:
         """Stand in for the substate's reasoning with justifications whose conditions are
@@ -2317,9 +2327,11 @@ class Agent:
         (measured in soar_sml: a result two levels up is asserted by '[level 2] (justify1)'
         and by 'justify3', which stays when the middle state goes)."""
         visited: list[Instantiation] = []
-        grounds = tuple(
-            self._backtrace(inst, inst.goal.level, through_o_support=True, visited=visited)
-        )
+        grounds = tuple(self._backtrace(
+            inst, inst.goal.level, through_o_support=True, visited=visited,
+            also=[pref.inst for pref in results if pref.inst is not inst],
+        ))
+        self._promote(results)
         if not grounds:
             self._ignore_unconditional_justification(inst)
             return
@@ -2367,7 +2379,8 @@ class Agent:
         )
         just.grounds = grounds
         just.source = inst.goal
-        if operators and _proposes_on_a_state(results):
+        inst.goal.justified[just] = None
+        if operators and _proposes_on_a_state(results, match_goal_id):
             operators = []  # a proposal is i-supported, as a rule's (see is_o_supported)
         on_operator = [any(pref.id is op for op in operators) for pref in results]
         mixed = bool(operators) and any(on_operator) and not all(on_operator)
@@ -2377,7 +2390,7 @@ class Agent:
             copy = Preference(pref.type, pref.id, pref.attr, pref.value, pref.referent, just)
             copy.o_supported = bool(operators) and not elaborates and not mixed
             just.prefs.append(copy)
-            if copy.o_supported and pref.type == REJECT:
+            if copy.o_supported and pref.type == REJECT and not pref.live:
                 # The copy is an o-reject, which takes the rule's own reject with it
                 # (measured in soar_sml: '+ (S1 ^x 5 -) [level 2]' is not asserted then).
                 pref.inst = None  # type: ignore[assignment]
@@ -2516,14 +2529,21 @@ class Agent:
         level: int,
         through_o_support: bool,
         visited: list[Instantiation] | None = None,
+        also: Iterable[Instantiation | None] = (),
     ) -> list[WME]:
         """Superstate WMEs (identifier above ``level``) that ``inst`` depends on, found by
-        walking back through the instantiations that made its local WMEs."""
+        walking back through the instantiations that made its local WMEs. ``also``: the
+        instantiations of its other results (made earlier, linked to the superstate by
+        ``inst``), which the justification depends on too."""
         grounds: dict[int, WME] = {}
+        starts = [inst]
+        for other in also:
+            if other is not None and all(other is not start for start in starts):
+                starts.append(other)
         if visited is not None:
-            visited.append(inst)
-        seen: set[int] = {id(inst)}
-        stack = [inst]
+            visited.extend(starts)
+        seen: set[int] = {id(start) for start in starts}
+        stack = starts[::-1]
         while stack:
             current = stack.pop()
             for wme in current.wmes:
@@ -2823,13 +2843,15 @@ def _token_order(wmes: tuple, place: tuple, starts: list[int]) -> tuple:
     return tuple(order)
 
 
-def _proposes_on_a_state(prefs: list[Preference]) -> bool:
-    """Whether the preferences propose an operator on a state: the kernel gives a
-    justification that does i-support, as it does a rule's match (measured in soar_sml:
-    a substate rule testing its selected operator that proposes an operator on the
-    superstate makes '+ (S1 ^operator O3 +) (justify1)', without ':O')."""
+def _proposes_on_a_state(prefs: list[Preference], goal: Identifier) -> bool:
+    """Whether the preferences propose an operator on the justification's match goal:
+    the kernel gives a justification that does i-support, as it does a rule's match
+    (measured in soar_sml: a substate rule testing its selected operator that proposes an
+    operator on the superstate makes '+ (S1 ^operator O3 +) (justify1)', without ':O';
+    a result that links the substate itself, with its proposal, keeps
+    '+ (S2 ^operator O2 +  :O ) (justify1)')."""
     return any(
-        pref.type == ACCEPTABLE and pref.attr == "operator" and pref.id.level is not None
+        pref.type == ACCEPTABLE and pref.attr == "operator" and pref.id is goal
         for pref in prefs
     )
 

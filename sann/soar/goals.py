@@ -36,6 +36,7 @@ class Goal:
         "retractions",
         "insts",
         "gds",
+        "justified",
         "alive",
     )
 
@@ -61,6 +62,8 @@ class Goal:
         self.insts: dict[Instantiation, None] = {}
         #: Goal dependency set: superstate WMEs its o-supported WMEs depend on.
         self.gds: set[WME] = set()
+        #: The justifications of this state's results, oldest first.
+        self.justified: dict[Instantiation, None] = {}
         self.alive = True
 
     def has_i_activity(self) -> bool:
