@@ -2338,8 +2338,8 @@ class Agent:
         home = inst.goal.superstate
         assert home is not None  # results come from substates
         just = self._make_justification(inst, results, grounds, home, inst)
-        self._justification_matches(inst.goal, min(self._level_of(p.id) for p in results))
-        self._watch_negations(just, visited, inst.goal.level)
+        if self._watch_negations(just, visited, inst.goal.level):
+            self._justification_matches(inst.goal, min(self._level_of(p.id) for p in results))
         while home.superstate is not None:
             higher = [p for p in just.prefs if self._level_of(p.id) < home.level]
             if not higher:
@@ -2396,12 +2396,6 @@ class Agent:
                 pref.inst = None  # type: ignore[assignment]
         self._new_justifications.append((fired, just))
         self._replace_duplicate_justification(just)
-        # A WME it tested leaving, or one that a negated condition of it tested appearing,
-        # retracts it even when its results are all o-supported: no preference changes,
-        # but it is activity at its level, like the kernel's (an elaboration cycle that
-        # fires nothing; measured).
-        for wme in grounds:
-            self._dependents.setdefault(wme, []).append(just)
         if home.level > 1:
             home.insts[just] = None
             level = home.level
@@ -2453,10 +2447,54 @@ class Agent:
 
     def _watch_negations(
         self, just: Instantiation, visited: list[Instantiation], level: int
-    ) -> None:
-        """A justification also depends on the absence of what its instantiations' negated
-        conditions tested in superstates: watch for such a WME to appear."""
+    ) -> bool:
+        """Watch what the new justification matches: a WME it tested leaving, or one that
+        a negated condition of its instantiations tested in superstates appearing,
+        retracts it even when its results are all o-supported: no preference changes,
+        but it is activity at its level, like the kernel's (an elaboration cycle that
+        fires nothing; measured).
+
+        A justification whose conditions do not hold when it is made (backtracing
+        through local o-supported WMEs reaches tests of the past: a negation of a WME
+        that has since come, a WME since gone) never matches, so nothing retracts it:
+        watch nothing then and return False (measured in soar_sml: justify3 with
+        ``(state S1 -^problem <p*1>)`` when (S1 ^problem P1) stands and
+        ``(C5 -^digit1 <d*1>)`` for its own result (C5 ^digit1 5) makes no cycle at S1's
+        level, while justify1 with only the first makes one when (S1 ^problem P1) comes).
+        """
+        entries = list(self._negations_of(visited, level))
+        wm = self._wm
+        if any(wm.get(wme.timetag) is not wme for wme in just.grounds) or any(
+            self._negation_holds_not(element, bindings) for _, element, _, bindings in entries
+        ):
+            return False
+        for wme in just.grounds:
+            self._dependents.setdefault(wme, []).append(just)
         keys = []
+        for key, _, test, bindings in entries:
+            self._neg_watch.setdefault(key, []).append((just, test, bindings))
+            keys.append(key)
+        self._neg_keys[just] = keys
+        return True
+
+    def _negation_holds_not(self, element: object, bindings: dict[str, Symbol]) -> bool:
+        """Whether a WME now matches a negated condition or conjunctive negation."""
+        if isinstance(element, ConjunctiveNegation):
+            wmes: dict[WME, None] = {}
+            for cond in element.conditions:
+                if isinstance(cond, Condition):
+                    wmes.update(dict.fromkeys(self._wmes_of(cond)))
+                else:
+                    wmes.update(dict.fromkeys(self._wm.values()))
+            return negation_matches(element, list(wmes), bindings)
+        assert isinstance(element, Condition)
+        return negation_matches(element, self._wmes_of(element), bindings)
+
+    def _negations_of(
+        self, visited: list[Instantiation], level: int
+    ) -> Iterator[tuple[tuple, object, object, dict[str, Symbol]]]:
+        """``(watch key, element, watched test, bindings)`` of every negated condition
+        on a superstate identifier in the instantiations behind a justification."""
         for source in visited:
             match = source.match
             if match is None:
@@ -2470,18 +2508,13 @@ class Agent:
                     for cond in element.conditions:
                         key = self._watch_key(cond, bindings, level)
                         if key is not None:
-                            self._neg_watch.setdefault(key, []).append(
-                                (just, element, bindings))
-                            keys.append(key)
+                            yield key, element, element, bindings
                     continue
                 if not isinstance(element, Condition) or not element.negated:
                     continue
                 key = self._watch_key(element, bindings, level)
                 if key is not None:
-                    self._neg_watch.setdefault(key, []).append(
-                        (just, element.value_test, bindings))
-                    keys.append(key)
-        self._neg_keys[just] = keys
+                    yield key, element, element.value_test, bindings
 
     def _watch_key(self, cond: object, bindings: dict[str, Symbol],
                    level: int) -> tuple | None:
