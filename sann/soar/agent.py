@@ -495,6 +495,8 @@ class Agent:
         self._changed_context: list[Slot] = []
         # (instantiation, the justification of its results) made in this wave
         self._new_justifications: list[tuple[Instantiation, Instantiation]] = []
+        #: A new justification's preference -> the result it copies, while not asserted.
+        self._copied_from: dict[Preference, Preference] = {}
         self._refs: dict[Identifier, int] = {}
         self._in_wm_phase = False
         self._phase_timetag = 0
@@ -1499,10 +1501,22 @@ class Agent:
                     if tracing:
                         self._emit_line(trace_preference("+", pref)[:-1]
                                         + " ALREADY SUPPORTED ON TOP LEVEL.  IGNORING.\n")
+                    self._drop_copied(pref)
                     continue
                 if tracing:
                     self._emit_line(trace_preference("+", pref))
                 self._add_preference(pref)
+        self._copied_from.clear()
+
+    def _drop_copied(self, pref: Preference) -> None:
+        """An ignored justification preference takes the results it copies with it: the
+        kernel's clones go together (measured in soar_sml: when '+ (S1 ^y 1 +  :O )
+        (justify1) ALREADY SUPPORTED ON TOP LEVEL.  IGNORING.', the substate rule's own
+        (S1 ^y 1) is neither asserted nor removed with the substate)."""
+        original = self._copied_from.get(pref)
+        while original is not None:
+            original.inst = None  # type: ignore[assignment]  # never asserted
+            original = self._copied_from.get(original)
 
     def _already_supported(self, pref: Preference) -> bool:
         """Whether the slot already holds the same o-supported preference: the kernel then
@@ -2390,6 +2404,8 @@ class Agent:
             copy = Preference(pref.type, pref.id, pref.attr, pref.value, pref.referent, just)
             copy.o_supported = bool(operators) and not elaborates and not mixed
             just.prefs.append(copy)
+            if not pref.live:
+                self._copied_from[copy] = pref
             if copy.o_supported and pref.type == REJECT and not pref.live:
                 # The copy is an o-reject, which takes the rule's own reject with it
                 # (measured in soar_sml: '+ (S1 ^x 5 -) [level 2]' is not asserted then).
