@@ -2435,7 +2435,10 @@ class Agent:
 
     def _replace_duplicate_justification(self, just: Instantiation) -> None:
         """A justification identical to a live one (same conditions, same results)
-        replaces it: the kernel retracts the old one in the next cycle (measured)."""
+        replaces it: the kernel retracts the old one in the next cycle (measured). One
+        made in the same wave is not retracted: no cycle goes to its level for it
+        (measured in soar_sml: justify5 and justify7 of two elaborations firing together
+        for the same (S1 ^seen O4) leave level 1 quiet)."""
         signature = (
             frozenset(w.timetag for w in just.grounds),
             frozenset(
@@ -2444,7 +2447,8 @@ class Agent:
             ),
         )
         old = self._justification_index.get(signature)
-        if old is not None and not old.retracted:
+        if old is not None and not old.retracted and all(
+                made is not old for _, made in self._new_justifications):
             self._schedule_retraction(old)
         self._justification_index[signature] = just
         just.match = signature
@@ -2600,7 +2604,8 @@ class Agent:
                     continue
                 if wme.attr in _ITEM_ATTRS:
                     wme = self._item_proposal(wme)
-                if self._level_of(wme.id) < level:
+                if self._level_of(wme.id) < level and (
+                        through_o_support or not self._own_result(wme, level)):
                     grounds.setdefault(wme.timetag, wme)
                     continue
                 supports = (self._supporting_instantiations(wme) if through_o_support
@@ -2617,6 +2622,25 @@ class Agent:
                     if visited is not None:
                         visited.append(source)
         return list(grounds.values())
+
+    def _own_result(self, wme: WME, level: int) -> bool:
+        """Whether a superstate WME stands only by results of the substate at ``level`` (or
+        below it): a goal dependency set takes it as the substate's own, following it to
+        the instantiation that made it (measured in soar_sml: a substate that tested its
+        own result (X1 ^w 0) to make an o-supported local WME, then rejected (X1 ^w 0),
+        goes on; when the top state made (X1 ^w 0), the substate is removed)."""
+        slot = self._slot(wme.id, wme.attr, create=False)
+        if slot is None:
+            return False
+        key = _vkey(wme.value)
+        prefs = [pref for ptype in (ACCEPTABLE, REQUIRE) for pref in slot.of_type(ptype)
+                 if _vkey(pref.value) == key and pref.inst is not None]
+        return bool(prefs) and all(self._made_at_or_below(pref.inst, level) for pref in prefs)
+
+    @staticmethod
+    def _made_at_or_below(inst: Instantiation, level: int) -> bool:
+        goal = inst.source if inst.is_justification else inst.goal
+        return goal is not None and goal.alive and goal.level >= level
 
     def _item_proposal(self, wme: WME) -> WME:
         """An impasse's ``^item`` or ``^non-numeric`` WME stands for the superstate's
