@@ -531,7 +531,6 @@ class Agent:
         # (justification, conjunctive negation, bindings) whose watched WME came this phase
         self._ncc_checks: list[tuple] = []
         self._justification_index: dict[tuple, Instantiation] = {}
-        self._pending_gds: list[tuple[Goal, list[WME]]] = []
         self._neg_keys: dict[Instantiation, list[tuple]] = {}
         self._dead_ids: list[Identifier] = []
         self._sources: weakref.WeakKeyDictionary[WME, Instantiation] = weakref.WeakKeyDictionary()
@@ -1718,8 +1717,6 @@ class Agent:
                 self.matcher.mark_removals()
             for wme in removes:
                 self._remove_wme(wme)
-            if self._pending_gds:
-                self._extend_gds()
             if self._unlinked:
                 traced = len(buffer)
                 self._collect_unlinked()
@@ -2288,36 +2285,24 @@ class Agent:
             self._gds_requests.append((goal, inst))
 
     def _grow_gds(self) -> None:
-        """Extend the goal dependency sets of the wave's o-supported local preferences,
-        once the wave's preferences are in their slots: the kernel elaborates a GDS through
-        the local i-supported WMEs' current acceptable preferences, so a WME that an
-        o-reject of the wave took away leads nowhere (measured in soar_sml: a counter made
-        by an elaboration on a superstate flag and modified by ``^steps <n> - (+ <n> 1)``
-        does not make the flag part of the GDS)."""
+        """Make the goal dependency set of a substate whose first o-supported local
+        preferences this wave made, from the instantiation that made them; once made, the
+        kernel does not extend it (measured in soar_sml: with the set made by an earlier
+        operator, or by another rule of the same wave, a superstate WME that only a later
+        o-supported instantiation tested leaves without removing the substate; tested by
+        the rule that made the set, it removes it, whoever made the WME). The set goes
+        through the local i-supported WMEs' current acceptable preferences, so a WME that
+        an o-reject of the wave took away leads nowhere (measured: a counter made by an
+        elaboration on a superstate flag and modified by ``^steps <n> - (+ <n> 1)`` does
+        not make the flag part of the GDS)."""
         requests, self._gds_requests = self._gds_requests, []
         for goal, inst in requests:
-            if not goal.alive:
+            if not goal.alive or goal.gds_made:
                 continue
-            # The kernel extends the GDS when the o-supported WME enters working memory,
-            # so superstate WMEs that leave in that same phase are not part of it.
-            wmes = self._backtrace(inst, goal.level, through_o_support=False)
-            if goal.gds:
-                self._pending_gds.append((goal, wmes))
-            else:  # a new GDS takes these WMEs at once (measured on the kernel)
-                for wme in wmes:
-                    goal.gds.add(wme)
-                    self._gds_index.setdefault(wme, {})[goal] = None
-
-    def _extend_gds(self) -> None:
-        pending, self._pending_gds = self._pending_gds, []
-        wm = self._wm
-        for goal, wmes in pending:
-            if not goal.alive:
-                continue
-            for wme in wmes:
-                if wm.get(wme.timetag) is wme and wme not in goal.gds:
-                    goal.gds.add(wme)
-                    self._gds_index.setdefault(wme, {})[goal] = None
+            goal.gds_made = True
+            for wme in self._backtrace(inst, goal.level, through_o_support=False):
+                goal.gds.add(wme)
+                self._gds_index.setdefault(wme, {})[goal] = None
 
     def _find_results(self, inst: Instantiation, level: int) -> list[Preference]:
         return find_results(inst, level, self._level_of, self._slots)
@@ -2604,8 +2589,7 @@ class Agent:
                     continue
                 if wme.attr in _ITEM_ATTRS:
                     wme = self._item_proposal(wme)
-                if self._level_of(wme.id) < level and (
-                        through_o_support or not self._own_result(wme, level)):
+                if self._level_of(wme.id) < level:
                     grounds.setdefault(wme.timetag, wme)
                     continue
                 supports = (self._supporting_instantiations(wme) if through_o_support
@@ -2622,25 +2606,6 @@ class Agent:
                     if visited is not None:
                         visited.append(source)
         return list(grounds.values())
-
-    def _own_result(self, wme: WME, level: int) -> bool:
-        """Whether a superstate WME stands only by results of the substate at ``level`` (or
-        below it): a goal dependency set takes it as the substate's own, following it to
-        the instantiation that made it (measured in soar_sml: a substate that tested its
-        own result (X1 ^w 0) to make an o-supported local WME, then rejected (X1 ^w 0),
-        goes on; when the top state made (X1 ^w 0), the substate is removed)."""
-        slot = self._slot(wme.id, wme.attr, create=False)
-        if slot is None:
-            return False
-        key = _vkey(wme.value)
-        prefs = [pref for ptype in (ACCEPTABLE, REQUIRE) for pref in slot.of_type(ptype)
-                 if _vkey(pref.value) == key and pref.inst is not None]
-        return bool(prefs) and all(self._made_at_or_below(pref.inst, level) for pref in prefs)
-
-    @staticmethod
-    def _made_at_or_below(inst: Instantiation, level: int) -> bool:
-        goal = inst.source if inst.is_justification else inst.goal
-        return goal is not None and goal.alive and goal.level >= level
 
     def _item_proposal(self, wme: WME) -> WME:
         """An impasse's ``^item`` or ``^non-numeric`` WME stands for the superstate's

@@ -12,6 +12,7 @@ whole, with the first of indifferent candidates chosen and with random choices.
 from __future__ import annotations
 
 import io
+import random
 import re
 from pathlib import Path
 
@@ -103,6 +104,83 @@ sp {propose*finish (state <s> ^superstate nil ^cleared yes -^note -^done)
 --> (<s> ^operator <o> +) (<o> ^name finish)}
 sp {apply*finish (state <s> ^operator.name finish ^kept yes)
 --> (<s> ^done yes) (write |note gone, kept stays| (crlf)) (halt)}
+"""
+
+# The goal dependency set is made once, from the first o-supported firing in the substate.
+# Step a makes it; b tests (X1 ^w 0) for an o-supported local WME; c rejects (X1 ^w 0), a
+# WME the set does not hold: the substate goes on.
+GDS_MADE_EARLIER = """
+sp {top*propose*init (state <s> ^superstate nil -^obj)
+--> (<s> ^operator <o> +) (<o> ^name init)}
+sp {top*apply*init (state <s> ^operator.name init) --> (<s> ^obj <x>) (<x> ^v 0 ^w 0)}
+sp {top*propose*go (state <s> ^superstate nil ^obj -^done)
+--> (<s> ^operator <o> +) (<o> ^name go)}
+sp {top*propose*stop (state <s> ^superstate nil ^done yes)
+--> (<s> ^operator <o> +) (<o> ^name stop)}
+sp {top*apply*stop (state <s> ^operator.name stop) --> (halt)}
+sp {sub*propose*a (state <s> ^superstate.operator.name go -^step)
+--> (<s> ^operator <o> +) (<o> ^name a)}
+sp {sub*apply*a (state <s> ^operator.name a ^superstate <ss>) (<ss> ^obj <x>) --> (<s> ^step 1)}
+sp {sub*propose*b (state <s> ^superstate.operator.name go ^step 1 -^loc)
+--> (<s> ^operator <o> +) (<o> ^name b)}
+sp {sub*apply*b (state <s> ^operator.name b ^superstate <ss>) (<ss> ^obj <x>) (<x> ^w 0)
+--> (<s> ^loc yes)}
+sp {sub*propose*c (state <s> ^superstate.operator.name go ^loc yes -^step 3)
+--> (<s> ^operator <o> +) (<o> ^name c)}
+sp {sub*apply*c (state <s> ^operator.name c ^superstate <ss>) (<ss> ^obj <x>) (<x> ^w 0)
+--> (<x> ^w 0 -) (<s> ^step 1 - 3)}
+sp {sub*propose*d (state <s> ^superstate.operator.name go ^step 3)
+--> (<s> ^operator <o> +) (<o> ^name d)}
+sp {sub*apply*d (state <s> ^operator.name d ^superstate <ss>) --> (<ss> ^done yes)}
+"""
+
+# The set made by b, which tests the substate's own result (X1 ^w 0): c's reject of it
+# removes the substate (and the agent loops).
+GDS_OF_OWN_RESULT = """
+sp {top*propose*init (state <s> ^superstate nil -^obj)
+--> (<s> ^operator <o> +) (<o> ^name init)}
+sp {top*apply*init (state <s> ^operator.name init) --> (<s> ^obj <x>) (<x> ^v 0)}
+sp {top*propose*go (state <s> ^superstate nil ^obj -^done)
+--> (<s> ^operator <o> +) (<o> ^name go)}
+sp {sub*propose*a (state <s> ^superstate <ss>) (<ss> ^operator.name go ^obj <x>) (<x> -^w)
+--> (<s> ^operator <o> +) (<o> ^name a)}
+sp {sub*apply*a (state <s> ^operator.name a ^superstate <ss>) (<ss> ^obj <x> ^operator.name go)
+--> (<x> ^w 0)}
+sp {sub*propose*b (state <s> ^superstate <ss> -^step) (<ss> ^operator.name go ^obj.w 0)
+--> (<s> ^operator <o> +) (<o> ^name b)}
+sp {sub*apply*b (state <s> ^operator.name b ^superstate <ss>) (<ss> ^obj <x>) (<x> ^w 0)
+--> (<s> ^step 2)}
+sp {sub*propose*c (state <s> ^superstate.operator.name go ^step 2)
+--> (<s> ^operator <o> +) (<o> ^name c)}
+sp {sub*apply*c (state <s> ^operator.name c ^superstate <ss>) (<ss> ^obj <x> ^operator.name go)
+   (<x> ^w 0)
+--> (<x> ^w 0 -) (<s> ^step 2 - 3)}
+"""
+
+# Two rules apply b in one wave, b1 testing (X1 ^v 0), b2 (X1 ^w 0): the set is that of the
+# one loaded (and fired) first; c rejects ATTR.
+GDS_ONE_WAVE = """
+sp {top*propose*init (state <s> ^superstate nil -^obj)
+--> (<s> ^operator <o> +) (<o> ^name init)}
+sp {top*apply*init (state <s> ^operator.name init) --> (<s> ^obj <x>) (<x> ^v 0 ^w 0)}
+sp {top*propose*go (state <s> ^superstate nil ^obj -^done)
+--> (<s> ^operator <o> +) (<o> ^name go)}
+sp {top*propose*stop (state <s> ^superstate nil ^done yes)
+--> (<s> ^operator <o> +) (<o> ^name stop)}
+sp {top*apply*stop (state <s> ^operator.name stop) --> (halt)}
+sp {sub*propose*b (state <s> ^superstate.operator.name go -^step)
+--> (<s> ^operator <o> +) (<o> ^name b)}
+sp {sub*apply*b1 (state <s> ^operator.name b ^superstate <ss>) (<ss> ^obj <x>) (<x> ^v 0)
+--> (<s> ^p yes)}
+sp {sub*apply*b2 (state <s> ^operator.name b ^superstate <ss>) (<ss> ^obj <x>) (<x> ^w 0)
+--> (<s> ^q yes ^step 2)}
+sp {sub*propose*c (state <s> ^superstate.operator.name go ^step 2)
+--> (<s> ^operator <o> +) (<o> ^name c)}
+sp {sub*apply*c (state <s> ^operator.name c ^superstate <ss>) (<ss> ^obj <x>) (<x> ^ATTR 0)
+--> (<x> ^ATTR 0 -) (<s> ^step 2 - 3)}
+sp {sub*propose*d (state <s> ^superstate.operator.name go ^step 3)
+--> (<s> ^operator <o> +) (<o> ^name d)}
+sp {sub*apply*d (state <s> ^operator.name d ^superstate <ss>) --> (<ss> ^done yes)}
 """
 
 # New identifiers made on the superstate by one firing, and variables starting with s.
@@ -243,6 +321,123 @@ def test_new_structure_on_the_superstate_is_justified_in_firing_order(
     assert ours == theirs
     assert re.search(r"\(I\d+ \^name sam", ours) and re.search(r"\(I\d+ \^name sam", theirs)
     _assert_same(run_kernel(path), run_ours(path))
+
+
+def test_the_dependency_set_is_made_once(tmp_path: Path) -> None:
+    path = _write(tmp_path, "gds-made-earlier", GDS_MADE_EARLIER)
+    theirs, ours = run_kernel(path), run_ours(path)
+    _assert_same(theirs, ours)
+    assert ours.operators == ["init", "go", "a", "b", "c", "d", "stop"]
+
+
+def test_the_dependency_set_holds_the_substates_own_result(tmp_path: Path) -> None:
+    path = _write(tmp_path, "gds-of-own-result", GDS_OF_OWN_RESULT)
+    theirs, ours = run_kernel(path, decisions=10), run_ours(path, decisions=10)
+    assert _counts(ours) == _counts(theirs)
+    assert ours.operators == theirs.operators == ["init", "go", "a", "b", "c", "a", "b", "c"]
+
+
+@pytest.mark.parametrize("swap", [False, True])
+@pytest.mark.parametrize("attr", ["v", "w"])
+def test_the_dependency_set_of_one_wave_is_the_first_rules(
+    attr: str, swap: bool, tmp_path: Path
+) -> None:
+    text = GDS_ONE_WAVE.replace("ATTR", attr)
+    if swap:  # b2 loaded first, fires first: its test is the set
+        lines = text.split("\n")
+        first = lines.index(next(line for line in lines if line.startswith("sp {sub*apply*b1")))
+        lines[first:first + 4] = lines[first + 2:first + 4] + lines[first:first + 2]
+        text = "\n".join(lines)
+    path = _write(tmp_path, f"gds-one-wave-{attr}", text)
+    theirs, ours = run_kernel(path, decisions=10), run_ours(path, decisions=10)
+    assert _counts(ours) == _counts(theirs)
+    assert ours.operators == theirs.operators
+    removed = (attr == "v") != swap
+    assert theirs.halted is not removed
+
+
+def random_substate_agent(seed: int) -> str:
+    """A top operator implemented by a substate that, one step operator per decision,
+    makes objects locally or on the top state, adds to them, links them to the top state
+    or into each other, rejects their values, and elaborates them from the substate and
+    from the top state; then it says it is done and the top state halts."""
+    rng = random.Random(seed)
+    steps = rng.randint(3, 6)
+    rules = [RANDOM_FRAME % (steps, steps)]
+    objects: list[tuple[str, str]] = []  # (name, the state it hangs on)
+    for step in range(steps):
+        conditions = ["(state <s> ^operator <op> ^superstate <ss>)", f"(<op> ^name step ^k {step})"]
+        actions: list[str] = []
+        for n in range(rng.randint(1, 3)):
+            kind = rng.choice(RANDOM_ACTIONS)
+            if kind == "new" or not objects:
+                name, where = f"o{len(objects)}", rng.choice(["<s>", "<s>", "<ss>"])
+                actions.append(f"({where} ^obj <{name}>) (<{name}> ^v {len(objects)})")
+                objects.append((name, where))
+                continue
+            name, where = rng.choice(objects)
+            var, value = f"<x{n}>", name[1:]
+            conditions += [f"({where} ^obj {var})", f"({var} ^v {value})"]
+            rule, action = _random_action(kind, step, n, var, value, where, rng)
+            if rule:
+                rules.append(rule)
+            actions.append(action)
+        lhs = " ".join(dict.fromkeys(conditions))
+        rules.append(f"sp {{sub*apply*act{step} {lhs} --> {' '.join(actions)}}}")
+    return "\n".join(rules) + "\n"
+
+
+RANDOM_FRAME = """
+sp {top*propose*go (state <s> ^superstate nil -^done) --> (<s> ^operator <o> +) (<o> ^name go)}
+sp {top*propose*stop (state <s> ^superstate nil ^done yes)
+--> (<s> ^operator <o> +) (<o> ^name stop)}
+sp {top*apply*stop (state <s> ^operator.name stop) --> (halt)}
+sp {sub*elaborate*name (state <s> ^superstate.operator.name go) --> (<s> ^name sub)}
+sp {sub*propose*step (state <s> ^name sub -^step) --> (<s> ^operator <o> +) (<o> ^name step ^k 0)}
+sp {sub*propose*step*k (state <s> ^name sub ^step {<k> < %d})
+--> (<s> ^operator <o> +) (<o> ^name step ^k <k>)}
+sp {sub*apply*step*first (state <s> ^operator <o>) (<o> ^name step ^k 0) --> (<s> ^step 1)}
+sp {sub*apply*step*count (state <s> ^operator <o> ^step <k>) (<o> ^name step ^k <k>)
+--> (<s> ^step <k> - (+ <k> 1))}
+sp {sub*propose*finish (state <s> ^name sub ^step %d) --> (<s> ^operator <o> +) (<o> ^name finish)}
+sp {sub*apply*finish (state <s> ^operator.name finish ^superstate <ss>) --> (<ss> ^done yes)}
+"""
+RANDOM_ACTIONS = ("new", "new", "attr", "link", "child", "top", "elab", "reject", "elablink",
+                  "topelab")
+
+
+def _random_action(kind: str, step: int, n: int, var: str, value: str, where: str,
+                   rng: random.Random) -> tuple[str, str]:
+    """One action on an existing object ``var``, and the rule it needs, if any."""
+    find = f"({where} ^obj <y>) (<y> ^v {value})"
+    if kind == "attr":
+        return "", f"({var} ^w{step} {rng.randint(0, 3)})"
+    if kind == "link":
+        return "", f"(<ss> ^res {var})"
+    if kind == "child":
+        return "", f"({var} ^child <c{step}{n}>) (<c{step}{n}> ^leaf {step})"
+    if kind == "top":
+        return "", f"(<ss> ^note{step} {var})"
+    if kind == "reject":
+        return "", f"({var} ^v {value} -)"
+    if kind == "elablink":
+        rule = (f"sp {{sub*elablink*{step}*{n} (state <s> ^name sub ^superstate <ss>"
+                f" ^step > {step}) {find} --> (<ss> ^seen <y>)}}")
+        return rule, f"({var} ^flag{step} yes)"
+    if kind == "topelab":
+        rule = (f"sp {{top*elab*{step}*{n} (state <s> ^superstate nil ^obj <y>)"
+                f" (<y> ^v {value}) --> (<y> ^top-seen yes)}}")
+        return rule, f"({var} ^z{step} 1)"
+    rule = (f"sp {{sub*elab*{step}*{n} (state <s> ^name sub ^superstate <ss>) {find}"
+            f" --> (<y> ^e{step} yes)}}")
+    return rule, f"({var} ^mark{step} yes)"
+
+
+@pytest.mark.parametrize("seed", [*range(30), 119, 142, 193, 213])
+def test_random_substate_agent_agrees(seed: int, tmp_path: Path) -> None:
+    path = _write(tmp_path, f"random-{seed}", random_substate_agent(seed))
+    theirs, ours = run_kernel(path, decisions=60), run_ours(path, decisions=60)
+    _assert_same(theirs, ours)
 
 
 # --------------------------------------------------------------------------- the agents
