@@ -399,16 +399,20 @@ class KernelAgent:
 
 
 def run_kernel(
-    path: str | Path, decisions: int | None = None, inputs: Inputs | None = None
+    path: str | Path, decisions: int | None = None, inputs: Inputs | None = None,
+    commands: Iterable[str] = (),
 ) -> RunResult:
     """Run an agent file in the real Soar kernel and collect a :class:`RunResult`.
 
-    ``decisions`` and ``inputs`` override the file's header comments.
+    ``decisions`` and ``inputs`` override the file's header comments; ``commands`` run
+    after the file is sourced (``srand 3``, ``indifferent-selection --first``).
     """
     spec = read_spec(path)
     limit = decisions if decisions is not None else spec.decisions
     with KernelAgent() as ka:
         ka.cmd(f"source {{{Path(path).resolve()}}}")
+        for line in commands:
+            ka.cmd(line)
         ka.take_log()
         ka.cmd("watch 1")
         ka.add_inputs(spec.inputs if inputs is None else inputs)
@@ -431,9 +435,11 @@ def run_kernel(
 
 
 def run_ours(
-    path: str | Path, decisions: int | None = None, inputs: Inputs | None = None
+    path: str | Path, decisions: int | None = None, inputs: Inputs | None = None,
+    commands: Iterable[str] = (),
 ) -> RunResult:
-    """Run an agent file in SANN's engine (``sann.soar.Agent``) and collect a RunResult.
+    """Run an agent file in SANN's engine (``sann.soar.Agent``) and collect a RunResult
+    (``commands`` as for :func:`run_kernel`).
 
     The engine writes only ``write`` output to ``out`` (trace level 0); the operator-name
     sequence comes from ``agent.operator_sequence`` and working memory from ``agent.wmes()``.
@@ -445,6 +451,8 @@ def run_ours(
     out = io.StringIO()
     agent = Agent(out=out)
     agent.source(str(path))
+    for line in commands:
+        agent.load(line)
     # The kernel half drops what sourcing printed (``source`` returns the text of ``echo``,
     # ``print`` or ``stats`` and the trace of a ``run`` goes to the discarded log); so do we.
     out.seek(0)
