@@ -30,7 +30,7 @@ import hashlib
 import io
 import itertools
 import re
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -399,16 +399,28 @@ class KernelAgent:
 
 
 def run_kernel(
-    path: str | Path, decisions: int | None = None, inputs: Inputs | None = None
+    path: str | Path,
+    decisions: int | None = None,
+    inputs: Inputs | None = None,
+    *,
+    before: Sequence[str] = (),
+    after: Sequence[str] = (),
 ) -> RunResult:
     """Run an agent file in the real Soar kernel and collect a :class:`RunResult`.
 
-    ``decisions`` and ``inputs`` override the file's header comments.
+    ``decisions`` and ``inputs`` override the file's header comments. ``before`` are
+    command lines given before the file is sourced (``indifferent-selection --first``,
+    ``srand 3``), ``after`` command lines given after it (``chunk never`` overrides a
+    file's own ``chunk always``); what they print is dropped like sourcing's output.
     """
     spec = read_spec(path)
     limit = decisions if decisions is not None else spec.decisions
     with KernelAgent() as ka:
+        for line in before:
+            ka.cmd(line)
         ka.cmd(f"source {{{Path(path).resolve()}}}")
+        for line in after:
+            ka.cmd(line)
         ka.take_log()
         ka.cmd("watch 1")
         ka.add_inputs(spec.inputs if inputs is None else inputs)
@@ -431,12 +443,19 @@ def run_kernel(
 
 
 def run_ours(
-    path: str | Path, decisions: int | None = None, inputs: Inputs | None = None
+    path: str | Path,
+    decisions: int | None = None,
+    inputs: Inputs | None = None,
+    *,
+    before: Sequence[str] = (),
+    after: Sequence[str] = (),
 ) -> RunResult:
     """Run an agent file in SANN's engine (``sann.soar.Agent``) and collect a RunResult.
 
     The engine writes only ``write`` output to ``out`` (trace level 0); the operator-name
     sequence comes from ``agent.operator_sequence`` and working memory from ``agent.wmes()``.
+    ``before`` and ``after`` are command lines given around the sourcing, as in
+    :func:`run_kernel`.
     """
     from sann.soar.agent import Agent
 
@@ -444,7 +463,11 @@ def run_ours(
     limit = decisions if decisions is not None else spec.decisions
     out = io.StringIO()
     agent = Agent(out=out)
+    for line in before:
+        agent.load(line, "<harness>")
     agent.source(str(path))
+    for line in after:
+        agent.load(line, "<harness>")
     # The kernel half drops what sourcing printed (``source`` returns the text of ``echo``,
     # ``print`` or ``stats`` and the trace of a ``run`` goes to the discarded log); so do we.
     out.seek(0)
