@@ -54,7 +54,7 @@ def kernel_run(path: Path, setting: str) -> RunResult:
     if key not in _RUNS:
         _RUNS[key] = run_kernel(
             path, inputs=INPUTS.get(path.name), before=setting_commands(setting),
-            after=AFTER_SOURCE,
+            commands=AFTER_SOURCE,
         )
     result = _RUNS[key]
     assert isinstance(result, RunResult)
@@ -70,7 +70,7 @@ def our_run(path: Path, setting: str) -> RunResult:
         try:
             _RUNS[key] = run_ours(
                 path, decisions=limit, inputs=INPUTS.get(path.name),
-                before=setting_commands(setting), after=AFTER_SOURCE,
+                before=setting_commands(setting), commands=AFTER_SOURCE,
             )
         except Exception as exc:  # noqa: BLE001 - reported by each test that asks
             _RUNS[key] = exc
