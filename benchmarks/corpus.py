@@ -35,6 +35,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+# This checkout's engine, not whichever sann the interpreter would find first (run as a
+# script, sys.path starts with benchmarks/, and the venv's editable install may be another
+# worktree's).
+sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "soar" / "differential"))
 import kernel as oracle  # noqa: E402  (the differential harness owns the kernel's lifecycle)
 
@@ -125,13 +129,20 @@ def our_run(path: Path, limit: int) -> tuple[float, int]:
 
 
 def our_decision_times(path: Path, limit: int) -> list[float]:
-    """Seconds of each of our decisions, one ``run(1)`` at a time, until halt."""
+    """Seconds of each of our decisions, one ``run(1)`` at a time, until halt. The last
+    call, which halts in the next cycle's phases before its decision, is timed with the
+    decision before it."""
     agent = our_agent(path)
-    times = []
+    times: list[float] = []
     while not agent.halted and len(times) < limit:
+        before = agent.stats["decisions"]
         t0 = time.perf_counter()
         agent.run(1)
-        times.append(time.perf_counter() - t0)
+        seconds = time.perf_counter() - t0
+        if agent.stats["decisions"] > before or not times:
+            times.append(seconds)
+        else:
+            times[-1] += seconds
     return times
 
 
@@ -192,11 +203,13 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--repeat", type=int, default=3, help="timed runs per engine")
     parser.add_argument("--only", nargs="*", default=None, help="program stems to run")
     args = parser.parse_args(argv)
+    import sann
     from sann.soar.compiled import is_compiled
 
     paths = [p for p in programs() if not args.only or p.stem in args.only]
-    print(f"engine: {'compiled' if is_compiled() else 'interpreted'}; best of {args.repeat}; "
-          f"flags: SLOW ours > {SLOW_RATIO:g}x kernel, SPIKE decision > {SPIKE_RATIO:g}x median")
+    print(f"engine: {'compiled' if is_compiled() else 'interpreted'} "
+          f"({Path(sann.__file__).parent}); best of {args.repeat}; flags: SLOW ours > "
+          f"{SLOW_RATIO:g}x kernel, SPIKE decision > {SPIKE_RATIO:g}x median")
     rows = []
     for path in paths:
         rows.append(measure(path, args.repeat))
