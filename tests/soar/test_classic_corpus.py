@@ -151,3 +151,27 @@ def test_settings_give_the_kernel_commands() -> None:
 def test_first_difference_points_at_the_parting() -> None:
     assert "at character 3:" in first_difference("abcX", "abcY")
     assert "at character 2:" in first_difference("ab", "abc")
+
+
+THREE_WAY = """
+sp {pick*propose*a (state <s> ^superstate nil) --> (<s> ^operator <o> + =) (<o> ^name a)}
+sp {pick*propose*b (state <s> ^superstate nil) --> (<s> ^operator <o> + =) (<o> ^name b)}
+sp {pick*propose*c (state <s> ^superstate nil) --> (<s> ^operator <o> + =) (<o> ^name c)}
+sp {pick*apply (state <s> ^operator <o>) (<o> ^name <n>) --> (<s> ^done <o>) (write <n>)}
+sp {pick*reject-done (state <s> ^operator <o> + ^done <o>) --> (<s> ^operator <o> -)}
+sp {pick*forget (state <s> ^operator <o> ^done { <d> <> <o> }) --> (<s> ^done <d> -)}
+"""
+
+
+@pytest.mark.parametrize("policy", ["softmax", "epsilon-greedy", "boltzmann"])
+def test_random_choices_are_the_kernels(tmp_path: Path, policy: str) -> None:
+    """The random half of the corpus rests on this: after ``srand N``, each policy picks
+    among indifferent operators exactly what the kernel picks (same draws, same use)."""
+    agent = tmp_path / "three-way.soar"
+    agent.write_text(THREE_WAY)
+    for seed in (1, 2):
+        before = (f"indifferent-selection --{policy}", f"srand {seed}")
+        theirs = run_kernel(agent, decisions=30, before=before)
+        ours = run_ours(agent, decisions=30, before=before)
+        assert len(theirs.output) == 29  # the 30th decision stops before its application
+        assert ours.output == theirs.output
