@@ -2716,12 +2716,13 @@ def _node_keys(reorder: Any, ordered: list) -> list[object]:
         return _KERNEL_VAR.sub(
             lambda m: names.setdefault(m.group(0), f"<{len(names)}>"), text)
 
-    keys: list[object] = []
-    for kcond in ordered:
+    def key(kcond: Any) -> object:
+        # A -{...} may hold another -{...}: its key is made of its own conditions' keys.
         if kcond.is_ncc:
-            keys.append(("ncc", tuple(canonical(reorder.format_kcond(c)) for c in kcond.inner)))
-        else:
-            keys.append(canonical(reorder.format_kcond(kcond)))
+            return ("ncc", tuple(key(c) for c in kcond.inner))
+        return canonical(reorder.format_kcond(kcond))
+
+    keys: list[object] = [key(kcond) for kcond in ordered]
     if len(_NODE_KEYS) >= 4096:
         _NODE_KEYS.clear()
     _NODE_KEYS[id(ordered)] = (ordered, keys)
