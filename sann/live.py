@@ -176,10 +176,12 @@ def _run_magic(cell: Cell, out: io.StringIO, answer: dict[str, Any]) -> Agent:
         agent.load(earlier.partition("\n")[2], file=f"<%%soar {options.agent}>")
     namespace: dict[str, Any] = {options.agent: agent}
     answer["first_line"] = 2
+    limit = options.decisions if options.decisions is not None else cell.decisions
     with contextlib.redirect_stdout(out):
         soar_cell(_with_limit(line, cell.decisions), body, namespace)
-    answer["limit"] = "-decision limit (no halt)" in out.getvalue()
-    return namespace[options.agent]
+    agent = namespace[options.agent]
+    answer["limit"] = not agent.halted and agent.stats["decisions"] >= limit
+    return agent
 
 
 def _with_limit(line: str, decisions: int) -> str:
