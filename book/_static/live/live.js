@@ -392,6 +392,7 @@
 
   window.SannLive = window.SannLive || {};
   window.SannLive.cells = cells;
+  window.SannLive.request = request;  // for benchmarks/live.py
   if (document.readyState === "loading") document.addEventListener("DOMContentLoaded", start);
   else start();
 })();
