@@ -16,7 +16,8 @@ BOOK = ROOT / "book"
 
 #: What the book is built from: a newer file here makes an existing build stale.
 SOURCES = [
-    (BOOK, "*.md"), (BOOK, "conf.py"), (BOOK / "_static", "*"), (ROOT / "sann", "**/*.py"),
+    (BOOK, "*.md"), (BOOK, "*.py"), (BOOK / "_static", "**/*"), (ROOT, "package-lock.json"),
+    (ROOT / "sann", "**/*.py"),
     (ROOT / "rules", "**/*.soar"), (ROOT / "grammars", "*.lark"),
 ]
 
