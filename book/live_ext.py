@@ -39,6 +39,40 @@ DEPENDENCIES = ("lark", "mypy_extensions")
 
 # ----------------------------------------------------------------------- the doctree
 
+_inputs: dict[str, tuple[list, str]] = {}
+
+
+def _blocks_input() -> tuple[list, str]:
+    """The planning chapter's ten-block C3 scene (seed 4), as its driver writes it."""
+    from sann.live import input_tree
+    from sann.tasks.blocks import features, generate_scene
+    from sann.tasks.planning import Planner, PlannerConfig
+
+    with Planner(PlannerConfig(engine="sann")) as planner:
+        planner.plan(features(generate_scene("C3", 10, 4)))
+        tree = input_tree(planner._backend.agent)
+    return tree, "the planning chapter's ten-block C3 scene (seed 4) is on the input-link"
+
+
+def _cups_input() -> tuple[list, str]:
+    from sann.exercises import small_pile
+
+    return small_pile(), "the exercises' four-cup pile (A and B on C, D on A) is on the input-link"
+
+
+#: Rule files that plan what a Python driver puts on the input-link: a live cell of theirs runs
+#: with one scene of the book there, recorded from the driver at build time.
+SCENES = {"blocks.soar": _blocks_input, "cups.soar": _cups_input}
+
+
+def scene_input(name: str | None) -> tuple[list, str] | None:
+    if name not in SCENES:
+        return None
+    if name not in _inputs:
+        _inputs[name] = SCENES[name]()
+    return _inputs[name]
+
+
 
 def _meta_node(meta: dict[str, Any]) -> nodes.raw:
     data = html.escape(json.dumps(meta), quote=True)
@@ -84,6 +118,9 @@ def mark_soar_blocks(app, doctree: nodes.document) -> None:
             source = Path(block.get("source", ""))
             name = source.name if source.parent == ROOT / "rules" else None
             meta = {"kind": "file", "file": name}
+            scene = scene_input(name)
+            if scene is not None:
+                meta["input"], meta["input_note"] = scene
         if meta is None:
             continue
         meta.update(index=index, shipped=text, page=app.env.docname)

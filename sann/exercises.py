@@ -13,6 +13,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from sann.live import put_input
 from sann.soar import Agent, SoarError
 from sann.soar.production import ConjunctiveNegation, Production
 from sann.soar.rhs import FUNCTIONS
@@ -39,7 +40,7 @@ class Exercise:
     preload: tuple[str, ...]
     start: str
     decisions: int
-    inputs: tuple[tuple[str, int | str], ...] = ()
+    inputs: tuple = ()  # an input tree (sann.live.InputTree) put on the input-link
     judge: Callable[[Exercise, str], list[Result]] = field(default=lambda e, t: [], repr=False)
 
     def agent(self, text: str, out: io.StringIO | None = None) -> Agent:
@@ -47,9 +48,8 @@ class Exercise:
         agent = Agent(out=out if out is not None else io.StringIO())
         for name in self.preload:
             agent.load((RULES / name).read_text(encoding="utf-8"), file=f"rules/{name}")
-        for attr, value in self.inputs:
-            agent.input_link.add(attr, value)
         agent.load(text, file=f"<exercise {self.name}>")
+        put_input(agent, list(self.inputs))
         return agent
 
 
@@ -195,6 +195,57 @@ def _judge_monitor(exercise: Exercise, text: str) -> list[Result]:
     ]
 
 
+# ------------------------------------------------------------ 4. cups without forks
+
+
+def small_pile(cap: int = 8) -> list:
+    """The input-link of the chapter's hand-made pile (A and B on C, D on A, so D lies over C
+    too; upright cups 100 mm apart in height), every cup a target, as the cups driver
+    (sann.tasks.cups) writes it; tests/book/test_exercises.py checks that it still does."""
+    positions = [(0.0, 0.0, 100.0), (60.0, 0.0, 100.0), (30.0, 0.0, 0.0), (0.0, 0.0, 200.0)]
+    over = {0: [2], 1: [2], 3: [0, 2]}
+    on = {0: [2], 1: [2], 3: [0]}
+    tree: list = [["cap", "i", str(cap)]] + [["target", "i", str(i)] for i in range(4)]
+    for i, (x, y, z) in enumerate(positions):
+        cup = [["index", "i", str(i)], ["name", "s", "ABCD"[i]], ["score", "f", "1.0"],
+               ["x", "f", repr(x)], ["y", "f", repr(y)], ["z", "f", repr(z)],
+               ["ax", "f", "0.0"], ["ay", "f", "0.0"], ["az", "f", "1.0"]]
+        cup += [["over", "i", str(k)] for k in over.get(i, [])]
+        cup += [["on", "i", str(k)] for k in on.get(i, [])]
+        tree.append(["cup", cup])
+    return tree
+
+
+def cup_sequences(agent: Agent) -> dict[str, list[str]]:
+    """Per target cup's name, the orders the agent wrote on its output-link, sorted."""
+    found: dict[str, list[str]] = {name: [] for name in "ABCD"}
+    for attr, sequence in agent.output_link.children():
+        if attr == "sequence":
+            fields = dict(sequence.children())
+            found["ABCD"[int(fields["target"])]].append(str(fields["order"]))
+    return {name: sorted(orders) for name, orders in found.items()}
+
+
+def _judge_no_fork(exercise: Exercise, text: str) -> list[Result]:
+    agent = exercise.agent(text)
+    agent.run(exercise.decisions)
+    edited = cup_sequences(agent)
+    reference = Agent(out=io.StringIO())
+    reference.load((RULES / "cups.soar").read_text(encoding="utf-8"), file="rules/cups.soar")
+    put_input(reference, small_pile(cap=1))
+    reference.run(exercise.decisions)
+    capped = cup_sequences(reference)
+    counts = {name: len(orders) for name, orders in edited.items()}
+    return [
+        Result("the planner still halts", agent.halted,
+               f"{agent.stats['decisions']} decisions" + ("" if agent.halted else ", no halt")),
+        Result("every cup gets exactly one sequence", all(n == 1 for n in counts.values()),
+               ", ".join(f"{name}: {n}" for name, n in counts.items())),
+        Result("the plans are those of the original rules with cap=1", edited == capped,
+               f"C: {', '.join(edited['C']) or 'none'} (cap=1: {', '.join(capped['C'])})"),
+    ]
+
+
 EXERCISES: dict[str, Exercise] = {
     e.name: e
     for e in (
@@ -212,6 +263,10 @@ EXERCISES: dict[str, Exercise] = {
             "hanoi-monitor", "Your own monitor", ("hanoi.soar",),
             "# rules/hanoi.soar is loaded, with ^disks 4 on the input-link. Add a rule that\n"
             "# writes each selected operator's name and the decision count, (dc).\n",
-            10_000, inputs=(("disks", 4),), judge=_judge_monitor),
+            10_000, inputs=(("disks", "i", "4"),), judge=_judge_monitor),
+        Exercise(
+            "cups-no-fork", "Cups: let the planner keep a single order", (),
+            (RULES / "cups.soar").read_text(encoding="utf-8"),
+            10_000, inputs=tuple(small_pile()), judge=_judge_no_fork),
     )
 }

@@ -42,7 +42,9 @@ class Cell:
     the whole file, so an edited fragment runs with the rest of its file. A ``%%soar`` cell
     has no file: its first line is the magic's, and ``preload`` lists the rule files sourced
     into its agent first (what the chapter's Python cells sourced), ``before`` the texts of
-    the page's earlier ``%%soar`` cells for the same agent, loaded without running.
+    the page's earlier ``%%soar`` cells for the same agent, loaded without running. ``input``
+    is what the chapter's Python driver put on the input-link (an `input_tree`), put there
+    again before the run.
     """
 
     text: str
@@ -51,6 +53,7 @@ class Cell:
     shipped: str = ""
     preload: list[str] = field(default_factory=list)
     before: list[str] = field(default_factory=list)
+    input: list = field(default_factory=list)
     trace: int = 1
     decisions: int = DEFAULT_LIMIT
     queries: list[str] = field(default_factory=list)
@@ -134,6 +137,7 @@ def _run_file(cell: Cell, out: io.StringIO, answer: dict[str, Any]) -> Agent:
     agent.trace(cell.trace)
     answer["first_line"] = first
     agent.load(text, file=f"rules/{cell.file}")
+    put_input(agent, cell.input)
     before = agent.stats["decisions"]
     agent.run(cell.decisions)
     done = agent.stats["decisions"] - before
@@ -227,6 +231,47 @@ def query(agent: Agent, command: str) -> dict[str, str]:
     return {"command": command, "text": out.getvalue()}
 
 
+# --------------------------------------------------------------------------- input-link
+
+#: A leaf of an input tree: [attribute, kind, text] with kind "i" (int), "f" (float) or "s";
+#: a node: [attribute, [children...]]. Numbers travel as text so that JSON in the page keeps
+#: 3.0 a float (JavaScript writes it as 3, which Python would read back as an int).
+InputTree = list
+
+
+def input_tree(agent: Agent) -> InputTree:
+    """The agent's input-link as an `InputTree`: the WMEs a driver put there (the agent's
+    architecture WMEs below the link; rules may have elaborated the same objects), even
+    after a run, to replay them in the page."""
+    arch = agent._arch
+
+    def walk(ident: Identifier, above: frozenset) -> InputTree:
+        tree: InputTree = []
+        for wme in arch.get(ident, ()):
+            value = wme.value
+            if isinstance(value, Identifier):
+                if value not in above:
+                    tree.append([str(wme.attr), walk(value, above | {value})])
+            else:
+                kind = {int: "i", float: "f"}.get(type(value), "s")
+                tree.append([str(wme.attr), kind, repr(value) if kind == "f" else str(value)])
+        return tree
+
+    link = agent.input_link.identifier
+    return walk(link, frozenset([link]))
+
+
+def put_input(agent: Agent, tree: InputTree, handle: Any = None) -> None:
+    """Add an `InputTree` under the input-link (or under ``handle``)."""
+    handle = agent.input_link if handle is None else handle
+    for item in tree:
+        if len(item) == 2:
+            put_input(agent, item[1], handle.add(item[0]))
+        else:
+            attr, kind, text = item
+            handle.add(attr, int(text) if kind == "i" else float(text) if kind == "f" else text)
+
+
 # ------------------------------------------------------------------------------ stepping
 
 
@@ -245,6 +290,7 @@ class Stepper:
         else:
             self.agent = Agent(out=self.out)
             self.agent.load(compose(cell)[0], file=f"rules/{cell.file}")
+            put_input(self.agent, cell.input)
         self.agent.trace(cell.trace)
 
     def _magic_agent(self, cell: Cell) -> Agent:

@@ -120,13 +120,15 @@
       bar.append(this.runButton, this.editButton, this.resetButton, this.phaseButton,
                  this.decisionButton, this.trace, limitLabel);
       const looks = element("span", "sann-live-looks");
-      for (const command of ["print --depth 2 S1", "matches", "preferences"]) {
-        const label = command.startsWith("print") ? "print S1" : command;
+      const LOOKS = [["print S1", "print --depth 2 S1"], ["output-link", "print --depth 3 I3"],
+                     ["matches", "matches"], ["preferences", "preferences"]];
+      for (const [label, command] of LOOKS) {
         looks.appendChild(button(label, `${command}, after the last run or step`, () => this.query(command)));
       }
       bar.appendChild(looks);
       this.status = element("span", "sann-live-status");
       bar.appendChild(this.status);
+      if (this.meta.input_note) bar.appendChild(element("span", "sann-live-input-note", `(${this.meta.input_note})`));
       root.appendChild(bar);
 
       this.output = element("div", "sann-live-output");
@@ -196,7 +198,8 @@
       return Object.assign({
         cell: this.meta.index, text: this.text(), file: this.meta.file || null,
         shipped: this.meta.shipped, preload: this.meta.preload || [], before,
-        exercise: this.meta.exercise || null, trace: Number(this.trace.value),
+        exercise: this.meta.exercise || null, input: this.meta.input || [],
+        trace: Number(this.trace.value),
         decisions: Math.max(1, Number(this.limit.value) || DEFAULT_DECISIONS),
       }, extra || {});
     }
