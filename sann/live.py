@@ -177,7 +177,7 @@ def _run_magic(cell: Cell, out: io.StringIO, answer: dict[str, Any]) -> Agent:
     for name in cell.preload:
         agent.load(rule_text(name), file=f"rules/{name}")
     for earlier in cell.before:
-        agent.load(earlier.partition("\n")[2], file=f"<%%soar {options.agent}>")
+        agent.load(earlier.partition("\n")[2], file=f"<%%soar {options.agent}: earlier cell>")
     namespace: dict[str, Any] = {options.agent: agent}
     answer["first_line"] = 2
     limit = options.decisions if options.decisions is not None else cell.decisions
@@ -203,15 +203,28 @@ def _summary(agent: Agent) -> dict[str, Any]:
 
 def error_report(error: SoarError, cell: Cell) -> dict[str, Any]:
     """An engine error as the page shows it: the engine's message (file:line:column and a
-    caret for syntax) and, for a syntax error, the line and column within the cell."""
+    caret for syntax) and, for a syntax error in the cell's own text, the line within the
+    cell (``cell_line``; None when the error is in another file or outside the cell)."""
     report: dict[str, Any] = {"message": str(error), "kind": type(error).__name__}
     if isinstance(error, SoarSyntaxError):
-        first = 1 if cell.file is not None or cell.exercise else 2
-        if cell.file is not None:
-            first = compose(cell)[1]
+        if cell.exercise is not None:
+            own, first = f"<exercise {cell.exercise}>", 1
+        elif cell.file is not None:
+            own, first = f"rules/{cell.file}", compose(cell)[1]
+        else:
+            own, first = f"<%%soar {_agent_name(cell.text)}>", 0  # the body is line 2 on
+        line = error.line - first + 1
+        inside = error.file == own and 1 <= line <= cell.text.count("\n") + 1
         report.update(line=error.line, column=error.column, file=error.file,
-                      cell_line=error.line - first + 1)
+                      cell_line=line if inside else None)
     return report
+
+
+def _agent_name(text: str) -> str:
+    try:
+        return parse_line(text.partition("\n")[0][len("%%soar"):]).agent
+    except SoarError:
+        return "soar"
 
 
 def query(agent: Agent, command: str) -> dict[str, str]:
@@ -301,7 +314,7 @@ class Stepper:
         for name in cell.preload:
             agent.load(rule_text(name), file=f"rules/{name}")
         for earlier in cell.before:
-            agent.load(earlier.partition("\n")[2], file=f"<%%soar {options.agent}>")
+            agent.load(earlier.partition("\n")[2], file=f"<%%soar {options.agent}: earlier cell>")
         agent.load(body, file=f"<%%soar {options.agent}>")
         return agent
 

@@ -74,11 +74,23 @@ def test_stepping_by_phase_and_by_decision() -> None:
 
 
 def test_a_tie_shows_its_substate() -> None:
-    rules = """sp {propose*left (state <s> ^superstate nil) --> (<s> ^operator <o> +) (<o> ^name left)}
-sp {propose*right (state <s> ^superstate nil) --> (<s> ^operator <o> +) (<o> ^name right)}
-"""
+    rules = "".join(
+        f"sp {{propose*{side} (state <s> ^superstate nil) --> (<s> ^operator <o> +)"
+        f" (<o> ^name {side})}}\n" for side in ("left", "right"))
     stepper = live.Stepper({"text": "%%soar tie --trace 0\n" + rules})
     goals = stepper.step("decision")["goals"]
     assert [g["id"] for g in goals] == ["S1", "S2"]
     assert goals[1]["impasse"] == "tie" and goals[1]["attribute"] == "operator"
     assert "acceptables" in goals[0]["preferences"]
+
+
+def test_syntax_errors_are_placed_in_the_cell() -> None:
+    magic = ("%%soar jug --trace 0\nsp {ok (state <s> ^superstate nil) --> (<s> ^a b)}\n"
+             "sp {bad (state <s> -->\n")
+    error = live.run_cell({"text": magic})["error"]
+    assert error["file"] == "<%%soar jug>"
+    assert error["cell_line"] == 3
+    exercise = "# comment\nsp {broken\n  (state <s> ^x)\n-- > (<s> ^y 1)}\n"
+    error = live.run_cell({"text": exercise, "exercise": "greedy-empty"})["error"]
+    assert error["file"] == "<exercise greedy-empty>" and error["cell_line"] == error["line"]
+    assert 2 <= error["cell_line"] <= 4

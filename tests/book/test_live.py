@@ -242,3 +242,16 @@ def test_edits_survive_a_reload_and_reset_restores(browser, served) -> None:
         page.check_clean()
     finally:
         page.context.close()
+
+
+def test_a_fragment_runs_in_its_file_on_the_chapter_scene(pages) -> None:
+    page = pages("planning")
+    cell = page.cell(r"blocks\*propose\*init-plans")
+    assert "C3 scene" in cell.locator(".sann-live-bar").inner_text()
+    output = run(cell)
+    assert "(init-plans)" in output and "(finish)" in output
+    assert "halted" in output
+    cell.get_by_role("button", name="output-link", exact=True).click()
+    cell.locator(".sann-live-query").first.wait_for(timeout=60_000)
+    assert "^sequence" in cell.locator(".sann-live-query").first.inner_text()
+    page.check_clean()

@@ -270,11 +270,12 @@
     showError(error) {
       const box = element("div", "sann-live-error");
       let where = "";
-      if (error.line) where = `line ${error.cell_line} of this cell, column ${error.column}: `;
+      if (error.cell_line) where = `line ${error.cell_line} of this cell, column ${error.column}: `;
+      else if (error.line) where = `in ${error.file}, line ${error.line}, column ${error.column}: `;
       box.appendChild(element("p", "sann-live-error-where", `${error.kind}: ${where}`));
       box.appendChild(element("pre", "sann-live-text", error.message));
       this.output.appendChild(box);
-      if (error.line) {
+      if (error.cell_line) {
         this.openEditor();
         this.edited(error.cell_line);
         const lines = this.editor.value.split("\n");
