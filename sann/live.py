@@ -19,12 +19,12 @@ from pathlib import Path
 from typing import Any
 
 from sann.soar import Agent, SoarError, SoarSyntaxError
-
-__all__ = ["Cell", "SoarError", "Stepper", "error_report", "hanoi_rate", "query",
-           "run_cell", "run_cell_keeping"]
 from sann.soar.introspect import preferences_text
 from sann.soar.magic import DEFAULT_LIMIT, parse_line, soar_cell
 from sann.soar.memory import Identifier
+
+__all__ = ["Cell", "SoarError", "Stepper", "error_report", "hanoi_rate", "input_tree",
+           "put_input", "query", "run_cell", "run_cell_keeping"]
 
 #: Where the rule files are: ``rules/`` beside the package (in the page: the packed copy).
 RULES = Path(__file__).resolve().parents[1] / "rules"

@@ -39,6 +39,7 @@
     defs.appendChild(marker);
     svg.appendChild(defs);
     const shown = new Set();
+    const labels = new Map();
     for (const edge of graph.edges) {
       const a = place.get(edge.from), b = place.get(edge.to);
       if (!a || !b) continue;
@@ -51,8 +52,18 @@
       const cls = `sann-live-edge${fresh ? " sann-live-new" : ""}${edge.acceptable ? " sann-live-acceptable" : ""}`;
       const group = el("g", { class: cls, "data-timetag": edge.timetag });
       group.appendChild(el("path", { d: path, fill: "none", "marker-end": "url(#sann-arrow)" }));
-      const label = `^${edge.attr}${edge.acceptable ? " +" : ""}`;
-      group.appendChild(el("text", { x: x2 - 6, y: y2 - 3, "text-anchor": "end" }, label));
+      // One label for the WMEs of one id, attribute and value: the selected operator and
+      // its acceptable preference (S1 ^operator O1 and S1 ^operator O1 +) share their arrow.
+      const key = `${edge.from} ${edge.attr} ${edge.to}`;
+      const label = labels.get(key);
+      if (label) {
+        label.textContent = `^${edge.attr} (and +)`;
+      } else {
+        const text = el("text", { x: x2 - 6, y: y2 - 3, "text-anchor": "end" },
+                        `^${edge.attr}${edge.acceptable ? " +" : ""}`);
+        labels.set(key, text);
+        group.appendChild(text);
+      }
       svg.appendChild(group);
     }
     for (const { x, y, node } of place.values()) {
