@@ -226,19 +226,23 @@ def test_a_magic_cell_shows_what_the_notebook_shows(pages) -> None:
 
 
 def test_edits_survive_a_reload_and_reset_restores(browser, served) -> None:
+    from playwright.sync_api import expect
+
     page = LivePage(browser, f"{served}soar-in-practice.html")
     try:
         cell = water_jug_cell(page)
         edit(cell, WATER_JUG.replace("# Water jug:", "# My water jug:", 1))
+        saved = page.page.evaluate(
+            "() => Object.keys(localStorage).filter(k => k.startsWith('sann-live:')).length")
+        assert saved == 1
         page.page.reload(wait_until="load")
-        cell = page.cell(r"water-jug\*detect\*goal\*achieved")
-        editor = cell.locator(".sann-live-editor")
-        assert editor.is_visible()
-        assert editor.input_value().startswith("# My water jug:")
-        cell.get_by_role("button", name="Reset", exact=True).click()
+        editor = water_jug_cell(page).locator(".sann-live-editor")
+        expect(editor).to_be_visible()
+        expect(editor).to_have_value(re.compile(r"^# My water jug:"))
+        water_jug_cell(page).get_by_role("button", name="Reset", exact=True).click()
         page.page.reload(wait_until="load")
-        cell = page.cell(r"water-jug\*detect\*goal\*achieved")
-        assert not cell.locator(".sann-live-editor").is_visible()
+        expect(water_jug_cell(page).locator("div.highlight-soar")).to_be_visible()
+        expect(water_jug_cell(page).locator(".sann-live-editor")).to_be_hidden()
         page.check_clean()
     finally:
         page.context.close()
