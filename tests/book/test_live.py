@@ -56,6 +56,9 @@ class LivePage:
 
     def __init__(self, browser, url: str) -> None:
         self.context = browser.new_context(viewport={"width": 1280, "height": 900})
+        # Several pages of the module stay open, two or three with Python running in them:
+        # on a loaded 2-core machine a click can wait for a busy renderer past 30 s.
+        self.context.set_default_timeout(120_000)
         self.page = self.context.new_page()
         self.errors: list[str] = []
         self.external: list[str] = []
