@@ -54,7 +54,10 @@ from sann.soar.production import (
     Var,
 )
 
-__all__ = ["BruteForceMatcher", "Match", "Rete", "check_production", "symbol_order_less"]
+__all__ = [
+    "BruteForceMatcher", "Match", "Rete", "check_production", "symbol_order_less",
+    "unconnected_identifiers",
+]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -276,10 +279,27 @@ def _check_scope(
     production: Production, elements: tuple[ConditionElement, ...], outer_linked: set[str],
     outer_bound: set[str], links: bool,
 ) -> None:
-    """Check linkage and bound relational variables of one scope (the production, or the
-    inside of a conjunctive negation, whose own positive conditions bind local variables)."""
+    """Check one scope (the production, or the inside of a conjunctive negation, whose own
+    positive conditions bind local variables): its conjunctive negations are not empty, its
+    negated conditions' relational tests compare with bound variables, and (``links``
+    only) every condition is linked to a state."""
     bound = outer_bound | _bound_by(elements)
-    linked = set(outer_linked)
+    linked = _linked(elements, outer_linked)
+    for element in elements:
+        if isinstance(element, ConjunctiveNegation):
+            if not element.conditions:
+                raise SoarSemanticError(production.name, "empty conjunctive negation -{ }",
+                                        production.location)
+            _check_scope(production, element.conditions, linked, bound, links)
+            continue
+        _check_condition(production, element, linked, bound, links)
+
+
+def _linked(elements: Iterable[ConditionElement], outer: set[str]) -> set[str]:
+    """``outer`` and the identifiers the positive conditions of one scope reach from the
+    states: a state or impasse condition's identifier, then the values of conditions on
+    reached identifiers (the kernel's "connected to a goal": never through attributes)."""
+    linked = set(outer)
     positives = [e for e in elements if isinstance(e, Condition) and not e.negated]
     for cond in positives:
         if cond.goal is not None:
@@ -289,18 +309,11 @@ def _check_scope(
         grown = False
         for cond in positives:
             if linked.intersection(equality_vars(cond.id_test)):
-                new = set(equality_vars(cond.value_test))  # the kernel links through values
+                new = set(equality_vars(cond.value_test))
                 if not new <= linked:
                     linked |= new
                     grown = True
-    for element in elements:
-        if isinstance(element, ConjunctiveNegation):
-            if not element.conditions:
-                raise SoarSemanticError(production.name, "empty conjunctive negation -{ }",
-                                        production.location)
-            _check_scope(production, element.conditions, linked, bound, links)
-            continue
-        _check_condition(production, element, linked, bound, links)
+    return linked
 
 
 def _check_condition(
@@ -317,14 +330,25 @@ def _check_condition(
         raise SoarSemanticError(name, f"condition {_show(cond)} is not linked to a state: "
                                 f"<{ids[0]}> is not reachable from a state or impasse "
                                 "condition", production.location)
-    scope = bound
-    if cond.negated:
-        scope = bound.union(*(equality_vars(t) for t in _fields(cond)))
     for test in _fields(cond):
         for var in relational_vars(test):
-            if var not in scope:
-                raise SoarSemanticError(name, f"variable <{var}> in a relational test of "
-                                        f"{_show(cond)} is never bound", production.location)
+            if var in bound:
+                continue
+            if cond.negated:
+                raise SoarSemanticError(name, f"unbound referent in negated relational test "
+                                        f"{_relation_text(test, var)} of {_show(cond)}: a "
+                                        "negated condition can only compare with a variable "
+                                        "bound by a positive condition", production.location)
+            raise SoarSemanticError(name, f"variable <{var}> in a relational test of "
+                                    f"{_show(cond)} is never bound", production.location)
+
+
+def _relation_text(test: Test, var: str) -> str:
+    """The relational test of ``test`` that compares with ``<var>``, as written."""
+    for inner in _atoms(test):
+        if isinstance(inner, Relational) and inner.operand == Var(var):
+            return f"{inner.op} <{var}>"
+    return f"<{var}>"
 
 
 def _show(cond: Condition) -> str:
@@ -346,24 +370,49 @@ def _show(cond: Condition) -> str:
             f"{text(cond.value_test)}{plus})")
 
 
-def check_production(production: Production, links: bool = True) -> None:
-    """Raise :class:`SoarSemanticError` naming the production when it cannot be matched.
+def check_production(production: Production, links: bool = False) -> None:
+    """Raise :class:`SoarSemanticError` naming the production when the kernel refuses it.
 
-    The first condition must be a positive ``state``/``impasse`` condition, every
-    condition's identifier must be reachable from a state through positive conditions,
-    and every variable used in a relational test must be bound (by a positive condition,
-    or — inside a negation — locally by the negation itself).  A variable that appears only
-    inside a negation is legal: it is local to the negation.
+    Measured in soar_sml 9.6, the kernel refuses a production without a positive condition
+    ("no positive conditions that reference a goal state") and a negated condition with a
+    relational test on a variable no positive condition binds (its own equality tests do
+    not count: ``-(<s> ^b {<z> > <z>})`` is refused).  Everything else loads, in any order:
+    a first condition that is a negation, conditions whose identifier no state reaches
+    (it warns, see :func:`unconnected_identifiers`), identifiers reached only through an
+    attribute variable.  It silently drops a relational test of a positive condition on a
+    variable that nothing binds (the parser does that too, see
+    ``syntax._drop_unbound_relations``): here such a test is refused, as a production built
+    by hand that holds one does not say what it means.  A variable that appears only inside
+    a negation is local to it.
 
-    ``links=False`` drops the two linkage rules (the kernel loads such productions with a
-    warning) but still requires a positive first condition.
+    ``links=True`` adds a rule stricter than the kernel's: every condition must be linked
+    to a state through positive conditions.
     """
-    conditions = production.conditions
-    first = conditions[0] if conditions else None
-    if not isinstance(first, Condition) or first.negated or (links and first.goal is None):
-        raise SoarSemanticError(production.name, "the first condition must test a state: "
-                                "(state <s> ...) or (impasse <s> ...)", production.location)
-    _check_scope(production, conditions, set(), set(), links)
+    if not any(isinstance(e, Condition) and not e.negated for e in production.conditions):
+        raise SoarSemanticError(production.name, "the production has no positive condition "
+                                "(only negations): add one that tests a state, such as (state "
+                                "<s> ^superstate nil)", production.location)
+    _check_scope(production, production.conditions, set(), set(), links)
+
+
+def unconnected_identifiers(production: Production) -> list[str]:
+    """Identifiers of positive conditions (also inside conjunctive negations) that no state
+    or impasse condition reaches through values, in written order: the kernel loads the
+    production and warns "identifier <x> is not connected to any goal or impasse"."""
+    found: dict[str, None] = {}
+
+    def visit(elements: tuple[ConditionElement, ...], outer: set[str]) -> None:
+        linked = _linked(elements, outer)
+        for element in elements:
+            if isinstance(element, ConjunctiveNegation):
+                visit(element.conditions, linked)
+            elif not element.negated:
+                ids = equality_vars(element.id_test)
+                if ids and not linked.intersection(ids):
+                    found.setdefault(ids[0], None)
+
+    visit(production.conditions, set())
+    return list(found)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -506,7 +555,7 @@ class BruteForceMatcher:
     the Rete's property tests.
     """
 
-    def __init__(self, check_links: bool = True) -> None:
+    def __init__(self, check_links: bool = False) -> None:
         self.check_links = check_links
         self._productions: dict[str, Production] = {}
         self._wmes: dict[WME, None] = {}
@@ -2109,12 +2158,12 @@ class Rete:
     """Doorenbos's Rete with hashed alpha and beta memories, negative and NCC nodes and
     shared prefixes.  Same interface as :class:`BruteForceMatcher`.
 
-    ``check_links=False`` accepts conditions that are not linked to a state, and a first
-    condition without ``state`` (the real kernel only warns about both); they are joined on
-    any bound variable, or as a cross product.
+    Conditions not linked to a state load, as in the kernel (which warns about them); they
+    are joined on any bound variable, or as a cross product.  ``check_links=True`` refuses
+    them instead (see :func:`check_production`).
     """
 
-    def __init__(self, check_links: bool = True) -> None:
+    def __init__(self, check_links: bool = False) -> None:
         self.check_links = check_links
         self._root = _Node(self, None)
         self._root_token = _new_token(None, None, (), self._root)

@@ -222,13 +222,26 @@ def test_disjunction_and_conjunction() -> None:
 
 
 def test_tests_in_identifier_and_attribute_positions() -> None:
-    [c] = lhs("(state { <s> <> <t> } ^{ <> name <> type })")
+    c, _ = lhs("(state { <s> <> <t> } ^{ <> name <> type }) (<s> ^b <t>)")
     assert c.id_test == Conjunction((S, Relational("<>", Var("t"))))
     assert c.attr_test == Conjunction(
         (Relational("<>", Const("name")), Relational("<>", Const("type")))
     )
     assert c.value_test == Var("v*1")  # no letter to take from the attribute test
     assert lhs("(state <s> ^<attr> <v>)")[0].attr_test == Var("attr")
+
+
+def test_relational_tests_on_variables_nothing_binds_are_dropped() -> None:
+    # The kernel drops them from positive conditions (in any field, also inside a
+    # conjunctive negation) and prints (state <s> ^c <c*1>) for (state <s> ^c < <y>).
+    [c] = lhs("(state { <s> <> <t> } ^{ <a> <> <u> } { < <y> <v> })")
+    assert (c.id_test, c.attr_test, c.value_test) == (S, Var("a"), Var("v"))
+    [c] = lhs("(state <s> ^c < <y>)")
+    assert c.value_test == Var("c*1")
+    [c, ncc] = lhs("(state <s> ^a <x>) -{(<s> ^b <z>) (<z> ^c { > <q> > <x> })}")
+    assert ncc.conditions[1].value_test == Relational(">", Var("x"))
+    [c, neg] = lhs("(state <s> ^c < <y>) -(<s> ^d <y>)")  # bound only by a negation
+    assert c.value_test == Var("c*1") and neg.value_test == Var("y")
 
 
 @pytest.mark.parametrize(
@@ -587,9 +600,10 @@ def test_parsing_a_file_of_200_productions_is_fast() -> None:
 
 # Tricky productions: the kernel must accept exactly those we accept. Not listed, because we
 # differ on purpose: unknown RHS functions and exec/cmd (the kernel rewrites an unknown
-# function into `exec`; we refuse both), and the "condition not linked to a state" family,
-# which the kernel accepts with a warning and our matcher refuses at add_production; numbers
-# too large for 64 bits, which the kernel reports as "bad integer" and then loads anyway.
+# function into `exec`; we refuse both); numbers too large for 64 bits, which the kernel
+# reports as "bad integer" and then loads anyway. The matcher's load-time checks (conditions
+# not linked to a state, relational tests on unbound variables) are compared with the kernel
+# in test_load_checks_kernel.py.
 KERNEL_AGREEMENT = [
     "(state <s> ^a.b.c <v> -^d.e f) --> (<s> ^x.y z)",
     "(state <s>) --> (write hi)",
