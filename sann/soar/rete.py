@@ -56,7 +56,7 @@ from sann.soar.production import (
 
 __all__ = [
     "BruteForceMatcher", "Match", "Rete", "check_production", "symbol_order_less",
-    "unconnected_identifiers",
+    "kernel_refusals", "load_warnings",
 ]
 
 
@@ -330,17 +330,7 @@ def _check_condition(
         raise SoarSemanticError(name, f"condition {_show(cond)} is not linked to a state: "
                                 f"<{ids[0]}> is not reachable from a state or impasse "
                                 "condition", production.location)
-    for test in _fields(cond):
-        for var in relational_vars(test):
-            if var in bound:
-                continue
-            if cond.negated:
-                raise SoarSemanticError(name, f"unbound referent in negated relational test "
-                                        f"{_relation_text(test, var)} of {_show(cond)}: a "
-                                        "negated condition can only compare with a variable "
-                                        "bound by a positive condition", production.location)
-            raise SoarSemanticError(name, f"variable <{var}> in a relational test of "
-                                    f"{_show(cond)} is never bound", production.location)
+    _check_relations(production, cond, bound)
 
 
 def _relation_text(test: Test, var: str) -> str:
@@ -373,46 +363,121 @@ def _show(cond: Condition) -> str:
 def check_production(production: Production, links: bool = False) -> None:
     """Raise :class:`SoarSemanticError` naming the production when the kernel refuses it.
 
-    Measured in soar_sml 9.6, the kernel refuses a production without a positive condition
-    ("no positive conditions that reference a goal state") and a negated condition with a
-    relational test on a variable no positive condition binds (its own equality tests do
-    not count: ``-(<s> ^b {<z> > <z>})`` is refused).  Everything else loads, in any order:
-    a first condition that is a negation, conditions whose identifier no state reaches
-    (it warns, see :func:`unconnected_identifiers`), identifiers reached only through an
-    attribute variable.  It silently drops a relational test of a positive condition on a
-    variable that nothing binds (the parser does that too, see
-    ``syntax._drop_unbound_relations``): here such a test is refused, as a production built
-    by hand that holds one does not say what it means.  A variable that appears only inside
-    a negation is local to it.
+    Measured in soar_sml 9.6, the kernel refuses a production whose match has no root
+    (see `_roots`: no ``state`` condition, and every positive condition's identifier is
+    the value of another, as in ``(<s> ^a <s>)`` or only negations), and a negated condition
+    with a relational test on a variable no positive condition binds (its own equality
+    tests do not count: ``-(<s> ^b {<z> > <z>})`` is refused).  Everything else loads, in
+    any order: a negation first, conditions no state reaches (it warns, see
+    :func:`load_warnings`), identifiers reached only through an attribute variable.  It
+    silently drops a relational test of a positive condition on a variable that nothing
+    binds (the parser does that too, see ``syntax._drop_unbound_relations``); here such a
+    test is refused, as a production built by hand that holds one does not say what it
+    means.  A variable that appears only inside a negation is local to it.
 
     ``links=True`` adds a rule stricter than the kernel's: every condition must be linked
     to a state through positive conditions.
     """
-    if not any(isinstance(e, Condition) and not e.negated for e in production.conditions):
-        raise SoarSemanticError(production.name, "the production has no positive condition "
-                                "(only negations): add one that tests a state, such as (state "
-                                "<s> ^superstate nil)", production.location)
+    kernel_refusals(production)
     _check_scope(production, production.conditions, set(), set(), links)
 
 
-def unconnected_identifiers(production: Production) -> list[str]:
-    """Identifiers of positive conditions (also inside conjunctive negations) that no state
-    or impasse condition reaches through values, in written order: the kernel loads the
-    production and warns "identifier <x> is not connected to any goal or impasse"."""
-    found: dict[str, None] = {}
+def kernel_refusals(production: Production) -> None:
+    """The refusals of :func:`check_production` that the kernel makes when it loads a
+    production (the parser makes them too): no root, and a negated condition's relational
+    test on a variable no positive condition binds."""
+    if not _roots(production.conditions, set(), top=True)[0]:
+        raise SoarSemanticError(production.name, "no positive condition tests a state and "
+                                "each identifier is the value of another condition, so the "
+                                "match has nowhere to start: add a condition such as (state "
+                                "<s> ^superstate nil)", production.location)
+    _check_negated_relations(production, production.conditions, set())
 
-    def visit(elements: tuple[ConditionElement, ...], outer: set[str]) -> None:
-        linked = _linked(elements, outer)
-        for element in elements:
-            if isinstance(element, ConjunctiveNegation):
-                visit(element.conditions, linked)
-            elif not element.negated:
-                ids = equality_vars(element.id_test)
-                if ids and not linked.intersection(ids):
-                    found.setdefault(ids[0], None)
 
-    visit(production.conditions, set())
-    return list(found)
+def _check_negated_relations(production: Production, elements: tuple[ConditionElement, ...],
+                             outer: set[str]) -> None:
+    bound = outer | _bound_by(elements)
+    for element in elements:
+        if isinstance(element, ConjunctiveNegation):
+            _check_negated_relations(production, element.conditions, bound)
+        elif element.negated:
+            _check_relations(production, element, bound)
+
+
+def _check_relations(production: Production, cond: Condition, bound: set[str]) -> None:
+    """Every relational test of ``cond`` compares with a variable in ``bound``."""
+    for test in _fields(cond):
+        for var in relational_vars(test):
+            if var in bound:
+                continue
+            if cond.negated:
+                raise SoarSemanticError(production.name, "unbound referent in negated "
+                                        f"relational test {_relation_text(test, var)} of "
+                                        f"{_show(cond)}: a negated condition can only compare "
+                                        "with a variable bound by a positive condition",
+                                        production.location)
+            raise SoarSemanticError(production.name, f"variable <{var}> in a relational test "
+                                    f"of {_show(cond)} is never bound", production.location)
+
+
+def _roots(elements: Iterable[ConditionElement], outer: set[str], top: bool
+           ) -> tuple[list[str], set[str]]:
+    """The kernel's root variables of one scope (reorder.cpp's ``collect_root_variables``,
+    as measured in soar_sml 9.6), in written order: the identifiers of its positive
+    conditions that are neither bound outside it (``outer``) nor the value of one of its
+    positive conditions; at the top, when there are none, the identifier of the first
+    ``state`` condition (``(state <s> ^a <s>)`` loads, ``(impasse <s> ^a <s>)`` does not).
+    Also returned: the identifiers of state and impasse conditions (never warned about)."""
+    positives = [e for e in elements if isinstance(e, Condition) and not e.negated]
+    values = set(outer)
+    for cond in positives:
+        values.update(equality_vars(cond.value_test))
+    roots: dict[str, None] = {}
+    goals: set[str] = set()
+    for cond in positives:
+        for name in equality_vars(cond.id_test):
+            if cond.goal is not None:
+                goals.add(name)
+            if name not in values:
+                roots.setdefault(name, None)
+    if not roots and top:
+        first = next((c for c in positives if c.goal == "state"), None)
+        if first is not None:
+            roots = dict.fromkeys(equality_vars(first.id_test))
+    return list(roots), goals
+
+
+def load_warnings(production: Production) -> list[str]:
+    """What the kernel warns about when it loads the production (it loads it anyway): each
+    root identifier of a scope that is not a state or impasse ("identifier <x> is not
+    connected to any goal or impasse"), and positive conditions that no root reaches by
+    binding identifiers in any field ("the LHS conditions are not all connected")."""
+    found: list[str] = []
+    _scope_warnings(production.conditions, set(), found, top=True)
+    return list(dict.fromkeys(found))
+
+
+def _scope_warnings(elements: tuple[ConditionElement, ...], outer: set[str],
+                    found: list[str], top: bool) -> None:
+    roots, goals = _roots(elements, outer, top)
+    found.extend(f"identifier <{name}> is not connected to any goal or impasse"
+                 for name in roots if name not in goals)
+    bound = outer | set(roots)
+    waiting = [e for e in elements if isinstance(e, Condition) and not e.negated]
+    placed = True
+    while waiting and placed:
+        placed = False
+        for cond in list(waiting):
+            if bound.intersection(equality_vars(cond.id_test)):
+                waiting.remove(cond)
+                bound.update(*(equality_vars(test) for test in _fields(cond)))
+                placed = True
+    if waiting:
+        found.append("the LHS conditions are not all connected")
+    inner_outer = outer | _bound_by(elements)
+    for element in elements:
+        if isinstance(element, ConjunctiveNegation):
+            _scope_warnings(element.conditions, inner_outer, found, top=False)
 
 
 # ---------------------------------------------------------------------------------------------

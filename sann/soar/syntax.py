@@ -76,7 +76,7 @@ from sann.soar.production import (
     Test,
     Var,
 )
-from sann.soar.rete import equality_vars, unconnected_identifiers
+from sann.soar.rete import equality_vars, kernel_refusals, load_warnings
 
 __all__ = [
     "GRAMMAR_PATH",
@@ -563,10 +563,7 @@ class _ToDataclasses(Transformer):
         self._fresh_names.clear()
         self._used.clear()
         production = _check_production(production, self.functions)
-        self._warnings.extend(
-            f"identifier <{name}> is not connected to any goal or impasse"
-            for name in unconnected_identifiers(production)
-        )
+        self._warnings.extend(load_warnings(production))
         self.warnings.extend(_where(production) + message for message in self._warnings)
         self._warnings.clear()
         self.completed.append(production)
@@ -597,10 +594,14 @@ def _is_comma(item: object) -> bool:
 
 def _negate(elements: list[ConditionElement]) -> list[ConditionElement]:
     """``-`` before a condition or group, as the kernel does it: one condition flips its
-    sign (``-(<s> -^a b)`` is positive); several become a conjunctive negation."""
+    sign (``-(<s> -^a b)`` is positive), one conjunctive negation gives back its conditions
+    (``-(<s> -^a.b c)`` is ``(<s> ^a <a*1>) (<a*1> ^b c)``, measured in soar_sml 9.6);
+    several become a conjunctive negation."""
     if len(elements) == 1 and isinstance(elements[0], Condition):
         only = elements[0]
         return [dataclasses.replace(only, negated=not only.negated)]
+    if len(elements) == 1 and isinstance(elements[0], ConjunctiveNegation):
+        return list(elements[0].conditions)
     return [ConjunctiveNegation(tuple(elements))] if elements else []
 
 
@@ -751,6 +752,7 @@ def _check_production(production: Production, functions: Collection[str]) -> Pro
             if checked:
                 _check_signature(production, call, call is stand_alone)
             _check_refusal(production, call)
+    kernel_refusals(production)
     actions = _reorder_actions(production)
     _check_binary_preferences(production)
     if actions != production.actions:

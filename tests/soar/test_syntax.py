@@ -169,12 +169,12 @@ def test_negated_attribute_test_and_negated_condition() -> None:
 
 
 def test_negated_attribute_without_value() -> None:
-    assert lhs("(state <s> -^a)")[0] == cond("<s>", "a", "<a*1>", negated=True, goal="state")
+    assert lhs("(state <s> ^x y -^a)")[1] == cond("<s>", "a", "<a*1>", negated=True, goal="state")
 
 
 def test_negated_path_and_negated_multivalue_are_conjunctive_negations() -> None:
     # Kernel: -^d.e f prints as -{ (<s> ^d <d*1>) (<d*1> ^e f) }; -^a b c as -{ (<s> ^a b ^a c) }.
-    assert lhs("(state <s> -^d.e f)") == (
+    assert lhs("(state <s> ^x y -^d.e f)")[1:] == (
         ConjunctiveNegation((cond("<s>", "d", "<d*1>", goal="state"), cond("<d*1>", "e", "f"))),
     )
     assert lhs("(state <s> ^x y -^a b c)")[1] == ConjunctiveNegation(
@@ -520,7 +520,7 @@ def test_caret_keeps_tabs_aligned() -> None:
         ("sp {p (state <s> ^a b) --> (<s> ^a (+ <z> 1))}", ["<z>"]),
         ("sp {p (state <s> ^a b) --> (write <z>)}", ["<z>"]),
         ("sp {p (state <s> ^a b) --> (<x> ^c d) (<y> ^b <x>)}", ["<x>"]),
-        ("sp {p (state <s> -^a <n>) --> (<n> ^b c)}", ["<n>"]),
+        ("sp {p (state <s> ^x y -^a <n>) --> (<n> ^b c)}", ["<n>"]),
         ("sp {p (state <s> ^a b) -{(<s> ^c <n>) (<n> ^d e)} --> (<n> ^b c)}", ["<n>"]),
         ("sp {p (state <s> ^a > <n>) --> (write <n>)}", ["<n>"]),
         ("sp {p (state <s> ^a b) --> (<s> ^c (foo 1))}", ["unknown RHS function 'foo'"]),
