@@ -199,6 +199,10 @@ def productions(draw: st.DrawFn) -> str:
     return "sp {gen\n  " + "\n  ".join(lhs) + "\n-->\n  " + " ".join(rhs) + "}"
 
 
+# soar_sml 9.6.5 dies (segmentation fault, the whole process) loading some rules without a
+# positive state condition that have a variable attribute and a relational value test, such
+# as (<z> ^<a> < <z>) or (<a> ^{ <> c <x> } < <s>): more examples, or other ones, of this
+# generator meet such rules (the derandomized 150 do not).
 @settings(max_examples=150, derandomize=True, deadline=None,
           suppress_health_check=[HealthCheck.too_slow])
 @given(productions())
