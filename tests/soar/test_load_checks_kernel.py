@@ -18,7 +18,7 @@ import warnings
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from sann.soar.agent import Agent
@@ -72,7 +72,10 @@ def assert_same_verdict(text: str, name: str) -> bool:
 # ------------------------------------------------------------------ the measured shapes
 
 # (production body, whether the kernel loads it): the table of the report. The
-# first two are from Soar's own selection-space default rules.
+# first two are from Soar's own selection-space default rules. Not here: rules the kernel
+# refuses for an ungrounded RHS action (test_syntax.py compares those): after such a
+# refusal soar_sml 9.6.5 names every variable in later RHS error messages "[RETE-loc]",
+# which breaks test_rhs_errors_kernel.py later in the same process.
 SHAPES = [
     ("(state <s> -^problem-space.dont-copy <att> ^default-state-copy yes ^duplicates <d>)"
      " (<s> ^<att> <v>) --> (<d> ^<att> <v>)", True),
@@ -108,9 +111,6 @@ SHAPES = [
     ("(state <s> ^a b) -{(<s> ^c <x>) -(<x> ^c < <x>)} --> (<s> ^d 1)", True),
     ("(state <s> ^a b) (<s> ^c { <=> <s> }) --> (<s> ^d 1)", True),
     ("(state <s> ^a b) (<s> ^c < <y>) --> (<s> ^d <y>)", True),
-    ("(state <s> ^a b) (<s> ^c < <y>) --> (write <y>)", False),
-    ("(state <s> ^a b) -(<s> ^c <y>) --> (<y> ^d 1)", False),
-    ("(state <s> ^a b) --> (<x> ^d 1)", False),
     ("(state <s> ^a b) (<x> ^e f) (<y> ^g h) --> (<s> ^d 1)", True),
     ("(<x> ^e <y>) (<y> ^h i) (<z> ^q <x>) --> (write hi)", True),
     ("(state <s> ^a <x>) (<x> ^<b> <c>) (<c> ^<d> <e>) (<b> ^f g) --> (write hi)", True),
@@ -195,18 +195,22 @@ def actions(draw: st.DrawFn) -> str:
 @st.composite
 def productions(draw: st.DrawFn) -> str:
     lhs = draw(st.lists(elements(), min_size=1, max_size=4))
+    # soar_sml 9.6.5 dies (segmentation fault) loading some rules without a positive state
+    # test that have a variable attribute and a relational value test, such as
+    # (<z> ^<a> < <z>) or (<a> ^{ <> c <x> } < <s>).
+    state = any(e.startswith("(state ") and " ^" in e for e in lhs)
+    assume(state or not any("^<" in e or "^{" in e for e in lhs))
     rhs = draw(st.lists(actions(), max_size=2))
     return "sp {gen\n  " + "\n  ".join(lhs) + "\n-->\n  " + " ".join(rhs) + "}"
 
 
-# soar_sml 9.6.5 dies (segmentation fault, the whole process) loading some rules without a
-# positive state condition that have a variable attribute and a relational value test, such
-# as (<z> ^<a> < <z>) or (<a> ^{ <> c <x> } < <s>): more examples, or other ones, of this
-# generator meet such rules (the derandomized 150 do not).
 @settings(max_examples=150, derandomize=True, deadline=None,
           suppress_health_check=[HealthCheck.too_slow])
 @given(productions())
 def test_we_load_exactly_what_the_kernel_loads(text: str) -> None:
+    # A refused rule whose actions hold variables may be refused by the kernel for an
+    # ungrounded action, which spoils its later error messages (see SHAPES).
+    assume(our_load(text)[0] or "<" not in text.split("-->")[1])
     assert_same_verdict(text, "gen")
 
 
