@@ -16,7 +16,13 @@ what a grammar cannot say:
   becomes a fresh variable, ``^a v1 v2`` one condition per value, ``-( ... )`` of several
   conditions a conjunctive negation, several preferences on one value several actions, and
   preferences other than ``+``/``-`` off ``^operator`` are dropped with a `SoarWarning`;
-- the checks the kernel makes when it loads a production: ``(state <s>)`` with no attribute
+- the kernel's load-time rewriting of conditions: a relational test of a positive condition
+  on a variable nothing binds is dropped (`_drop_unbound_relations`), and the negation of one
+  conjunctive negation is its conditions; and its warnings (`rete.load_warnings`: identifiers
+  not connected to a state, conditions not all connected);
+- the checks the kernel makes when it loads a production: no root for the match and
+  relational tests of negated conditions on unbound variables (`rete.kernel_refusals`),
+  ``(state <s>)`` with no attribute
   test, RHS actions whose identifier is not grounded, unbound function arguments, binary
   preferences off ``^operator``, numbers out of range, RHS functions called where they may
   not be (a value-only function as a stand-alone action or the reverse) or with the wrong
