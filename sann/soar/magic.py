@@ -20,7 +20,7 @@ from __future__ import annotations
 import argparse
 import shlex
 import sys
-from typing import Any
+from typing import Any, TextIO
 
 from .agent import Agent
 from .errors import SoarError
@@ -28,6 +28,31 @@ from .errors import SoarError
 #: Decisions a cell runs at most when no --decisions is given, so a rule set that never
 #: halts cannot hang the notebook.
 DEFAULT_LIMIT = 10_000
+
+
+#: What the kernel prints when a run halts or is interrupted. A cell says in its own words how
+#: the run ended (``halted after N decisions``), so these are left out of what a reader sees.
+KERNEL_STATUS = ("System halted.", "Interrupt received.", "This Agent halted.")
+
+
+class ReaderStream:
+    """A text stream for readers: passes the agent's output on without the kernel's status
+    messages (``System halted.``, ``Interrupt received.``), which a page of runs would repeat
+    after every halt. The trace and the ``write`` output go through unchanged."""
+
+    def __init__(self, stream: TextIO) -> None:
+        self.stream = stream
+
+    def write(self, text: str) -> int:
+        kept = text
+        for status in KERNEL_STATUS:
+            kept = kept.replace(status + "\n", "").replace(status, "")
+        if kept:
+            self.stream.write(kept)
+        return len(text)
+
+    def flush(self) -> None:
+        self.stream.flush()
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -67,7 +92,7 @@ def soar_cell(line: str, cell: str, namespace: dict[str, Any]) -> Agent:
     elif options.seed is not None:
         agent.srand(options.seed)
     previous = agent.out
-    agent.out = sys.stdout
+    agent.out = ReaderStream(sys.stdout)
     try:
         if options.run:  # before init-soar, which traces the new top state
             agent.trace(options.trace)

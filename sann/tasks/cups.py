@@ -22,15 +22,16 @@ simulator; only the labels look at the true poses. Per pile:
    approach corridor, reachable, at least half visible). A detection that matches no true cup
    is a pose the gripper would act on wrongly, so it is labelled not graspable.
 
-Datasets are cached per split (``sann.cache``: keyed on every parameter, the rule file's
-sha256, the sources of ``sann/vision`` and ``DATASET_VERSION``; written atomically), so the
-book and the tests rebuild nothing that has not changed.
+Datasets are cached per split (``sann.cache``: keyed on every parameter, the sha256 of the
+rule file's code without comments, the sources of ``sann/vision`` and ``DATASET_VERSION``;
+written atomically), so the book and the tests rebuild nothing that has not changed.
 """
 
 from __future__ import annotations
 
 import ast
 import hashlib
+import io
 import json
 import os
 import time
@@ -163,12 +164,18 @@ class _SannBackend:
     def __init__(self, rules: Path) -> None:
         from sann.soar.agent import Agent
 
-        self.agent = Agent()
+        #: What the agent printed in its last run (its `write` output and the halt message):
+        #: kept for a reader who asks, never sent to standard output, which would flood the book.
+        self.transcript = io.StringIO()
+        self.agent = Agent(out=self.transcript)
         self.agent.source(str(rules))
 
     def run(self, scene: CupScene, targets: Sequence[int], cap: int) -> list[CupSequence]:
         agent = self.agent
         agent.init()
+        self.transcript.seek(0)
+        self.transcript.truncate()
+        errors = len(agent.errors)
         il = agent.input_link
         il.add("cap", cap)
         for t in targets:
@@ -179,6 +186,8 @@ class _SannBackend:
                 for v in value if isinstance(value, list) else [value]:
                     c.add(attr, v)
         agent.run()
+        if len(agent.errors) > errors:
+            raise RuntimeError("the planning rules failed: " + "; ".join(agent.errors[errors:]))
         out = []
         for attr, q in agent.output_link.children():
             if attr == "sequence":
@@ -568,7 +577,7 @@ def _cached_split(split: str, n_piles: int, seed: int, params: CupsDataParams,
 
     description = {
         "split": split, "piles": n_piles, "seed": seed, "params": asdict(params),
-        "methods": list(methods), "rules_sha256": cache.file_sha256(planner.rules),
+        "methods": list(methods), "rules_code_sha256": cache.soar_code_sha256(planner.rules),
         "cap": planner.cap, "vision_sha256": vision_sha256(), "version": DATASET_VERSION,
     }
     return cache.get_or_build(

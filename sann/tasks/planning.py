@@ -23,6 +23,7 @@ there (``targets_per_run``; the scene stays on the input-link meanwhile).
 
 from __future__ import annotations
 
+import io
 import math
 import os
 from collections.abc import Iterable, Sequence
@@ -134,13 +135,19 @@ class _SannBackend:
     def __init__(self, rules: Path) -> None:
         from sann.soar.agent import Agent
 
-        self.agent = Agent()
+        #: What the agent printed in its last run (its `write` output and the halt message):
+        #: kept for a reader who asks, never sent to standard output, which would flood the book.
+        self.transcript = io.StringIO()
+        self.agent = Agent(out=self.transcript)
         self.agent.source(str(rules))
 
     def run(self, rows: list[tuple], targets: Sequence[int], config: PlannerConfig
             ) -> list[PlanSequence]:
         agent = self.agent
         agent.init()
+        self.transcript.seek(0)
+        self.transcript.truncate()
+        errors = len(agent.errors)
         il = agent.input_link
         il.add("cap", config.cap)
         il.add("horizon", config.horizon)
@@ -159,6 +166,8 @@ class _SannBackend:
             for face, value in faces:
                 b.add(face, value)
         agent.run()
+        if len(agent.errors) > errors:
+            raise RuntimeError("the planning rules failed: " + "; ".join(agent.errors[errors:]))
         out = []
         for attr, q in agent.output_link.children():
             if attr == "sequence":
@@ -257,6 +266,14 @@ class Planner:
         for seq in found:
             result[seq.target].append(seq)
         return {t: sorted(v, key=lambda s: (s.pair, s.t_o, s.order)) for t, v in result.items()}
+
+    @property
+    def agent(self):  # -> sann.soar.Agent (imported lazily, as the backend does)
+        """Our engine's agent, its working memory as the last run left it (the scene on the
+        input-link, the plans on the output-link): what a reader inspects or draws."""
+        if not isinstance(self._backend, _SannBackend) or self._backend.agent is None:
+            raise ValueError("only a planner of engine 'sann' that is not closed has an agent")
+        return self._backend.agent
 
     def close(self) -> None:
         self._backend.close()

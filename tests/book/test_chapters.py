@@ -58,3 +58,12 @@ def test_chapter_executes(chapter: Path, book_html: Path) -> None:
     errors = [o for o in outputs if o.get("output_type") == "error"]
     assert not errors, f"{chapter.name}: error outputs {errors}"
     nbformat.validate(notebook)
+
+
+@pytest.mark.parametrize("chapter", CHAPTERS, ids=[p.stem for p in CHAPTERS])
+def test_page_shows_no_kernel_halt_messages(chapter: Path, book_html: Path) -> None:
+    """Agents that plan thousands of scenes halt thousands of times: the kernel's status lines
+    ('System halted.', 'Interrupt received.') must not reach the reader."""
+    page = (book_html / f"{chapter.stem}.html").read_text(encoding="utf-8")
+    found = {status: page.count(status) for status in ("System halted", "Interrupt received")}
+    assert not any(found.values()), f"{chapter.stem}.html shows {found}"

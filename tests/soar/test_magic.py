@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from sann.soar import Agent, SoarError
-from sann.soar.magic import load_ipython_extension, parse_line, soar_cell
+from sann.soar.magic import KERNEL_STATUS, load_ipython_extension, parse_line, soar_cell
 
 RULES = """
 sp {p (state <s> ^superstate nil -^done) --> (<s> ^operator <o> +) (<o> ^name hello)}
@@ -56,3 +56,13 @@ def test_ipython_registration() -> None:
     load_ipython_extension(shell)
     shell.run_cell_magic("soar", "magicagent -t 0", RULES)
     assert shell.user_ns["magicagent"].halted
+
+
+def test_cell_output_leaves_out_the_kernels_halt_messages(capsys) -> None:
+    """The kernel's 'System halted.' / 'Interrupt received.' would repeat after every run of
+    a page; the cell's own line says how the run ended."""
+    soar_cell("stopper --trace 0", "sp {stop (state <s> ^superstate nil) --> (write |bye|) (halt)}",
+              {})
+    out = capsys.readouterr().out
+    assert "bye" in out and "stopper: halted after 0 decisions." in out
+    assert not any(status in out for status in KERNEL_STATUS)

@@ -131,3 +131,15 @@ def test_ours_agrees_with_soar_sml(mode: str) -> None:
             scene = generate_scene(mode, n, seed)
             feats = observe_scene(scene, seed).features
             assert ours.plan(feats) == kernel.plan(feats), f"{mode} seed {seed}"
+
+
+def test_planning_prints_nothing_and_keeps_the_transcript(
+    capfd: pytest.CaptureFixture[str],
+) -> None:
+    """The planner's agent halts once per scene; a chapter that plans thousands of scenes would
+    show as many "System halted." lines if the agent wrote to standard output."""
+    with Planner() as planner:
+        planner.plan(features(scene_from_blocks(ROW)))
+        transcript = planner._backend.transcript.getvalue()
+    assert capfd.readouterr().out == ""
+    assert "System halted." in transcript
