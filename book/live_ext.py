@@ -50,7 +50,7 @@ def _blocks_input() -> tuple[list, str]:
 
     with Planner(PlannerConfig(engine="sann")) as planner:
         planner.plan(features(generate_scene("C3", 10, 4)))
-        tree = input_tree(planner._backend.agent)
+        tree = input_tree(planner.agent)
     return tree, "the planning chapter's ten-block C3 scene (seed 4) is on the input-link"
 
 
@@ -116,7 +116,8 @@ def mark_soar_blocks(app, doctree: nodes.document) -> None:
             agents.setdefault(agent, []).append(index)
         elif block.get("language") in ("soar", "soar-cell"):
             source = Path(block.get("source", ""))
-            name = source.name if source.parent == ROOT / "rules" else None
+            rules = ROOT / "rules"
+            name = source.relative_to(rules).as_posix() if source.is_relative_to(rules) else None
             meta = {"kind": "file", "file": name}
             scene = scene_input(name)
             if scene is not None:
@@ -190,7 +191,9 @@ def engine_files() -> list[tuple[Path, str]]:
              (ROOT / "sann" / "exercises.py", "sann/exercises.py")]
     files += [(p, f"sann/soar/{p.name}") for p in sorted((ROOT / "sann" / "soar").glob("*.py"))]
     files += [(p, f"grammars/{p.name}") for p in sorted((ROOT / "grammars").glob("*.lark"))]
-    files += [(p, f"rules/{p.name}") for p in sorted((ROOT / "rules").glob("*.soar"))]
+    rules = ROOT / "rules"
+    files += [(p, f"rules/{p.relative_to(rules).as_posix()}")
+              for p in sorted(rules.glob("**/*.soar"))]
     for name in DEPENDENCIES:
         files += _distribution_files(name)
     return files

@@ -12,6 +12,7 @@ import io
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TextIO
 
 from sann.live import put_input
 from sann.soar import Agent, SoarError
@@ -43,7 +44,7 @@ class Exercise:
     inputs: tuple = ()  # an input tree (sann.live.InputTree) put on the input-link
     judge: Callable[[Exercise, str], list[Result]] = field(default=lambda e, t: [], repr=False)
 
-    def agent(self, text: str, out: io.StringIO | None = None) -> Agent:
+    def agent(self, text: str, out: TextIO | None = None) -> Agent:
         """A new agent with the shipped rules, the exercise's input and the reader's text."""
         agent = Agent(out=out if out is not None else io.StringIO())
         for name in self.preload:

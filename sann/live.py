@@ -20,7 +20,7 @@ from typing import Any
 
 from sann.soar import Agent, SoarError, SoarSyntaxError
 from sann.soar.introspect import preferences_text
-from sann.soar.magic import DEFAULT_LIMIT, parse_line, soar_cell
+from sann.soar.magic import DEFAULT_LIMIT, ReaderStream, parse_line, soar_cell
 from sann.soar.memory import Identifier
 
 __all__ = ["Cell", "SoarError", "Stepper", "error_report", "hanoi_rate", "input_tree",
@@ -65,9 +65,9 @@ class Cell:
 
 
 def rule_text(name: str) -> str:
-    """A shipped rule file's text; only plain names under rules/ (no paths)."""
-    path = RULES / name
-    if path.parent != RULES or not path.is_file():
+    """A shipped rule file's text, by its path under rules/ (nothing outside it)."""
+    path = (RULES / name).resolve()
+    if not path.is_relative_to(RULES.resolve()) or not path.is_file():
         raise SoarError(f"no rule file {name!r} in rules/")
     return path.read_text(encoding="utf-8")
 
@@ -102,7 +102,7 @@ def run_cell_keeping(request: dict[str, Any]) -> tuple[dict[str, Any], Agent | N
     try:
         if cell.exercise is not None:
             agent = _run_exercise(cell, out, answer)
-        elif cell.file is None:
+        elif cell.text.startswith("%%soar"):
             agent = _run_magic(cell, out, answer)
         else:
             agent = _run_file(cell, out, answer)
@@ -133,10 +133,10 @@ def hanoi_rate(disks: int | None = None) -> dict[str, float]:
 
 def _run_file(cell: Cell, out: io.StringIO, answer: dict[str, Any]) -> Agent:
     text, first = compose(cell)
-    agent = Agent(out=out)
+    agent = Agent(out=ReaderStream(out))
     agent.trace(cell.trace)
     answer["first_line"] = first
-    agent.load(text, file=f"rules/{cell.file}")
+    agent.load(text, file=_file_label(cell))
     put_input(agent, cell.input)
     before = agent.stats["decisions"]
     agent.run(cell.decisions)
@@ -149,13 +149,19 @@ def _run_file(cell: Cell, out: io.StringIO, answer: dict[str, Any]) -> Agent:
     return agent
 
 
+def _file_label(cell: Cell) -> str:
+    """The file name errors of a cell's text name: its rule file's path (relative, so that
+    ``source`` inside it resolves from the rules' folder), or ``<cell>``."""
+    return f"rules/{cell.file}" if cell.file is not None else "<cell>"
+
+
 def _run_exercise(cell: Cell, out: io.StringIO, answer: dict[str, Any]) -> Agent:
     """An exercise's rules on top of its shipped file, then the exercise's check."""
     from sann.exercises import EXERCISES, check
 
     exercise = EXERCISES[cell.exercise]
     answer["first_line"] = 1
-    agent = exercise.agent(cell.text, out)
+    agent = exercise.agent(cell.text, ReaderStream(out))
     agent.trace(cell.trace)
     limit = min(cell.decisions, exercise.decisions)
     agent.run(limit)
@@ -209,8 +215,8 @@ def error_report(error: SoarError, cell: Cell) -> dict[str, Any]:
     if isinstance(error, SoarSyntaxError):
         if cell.exercise is not None:
             own, first = f"<exercise {cell.exercise}>", 1
-        elif cell.file is not None:
-            own, first = f"rules/{cell.file}", compose(cell)[1]
+        elif not cell.text.startswith("%%soar"):
+            own, first = _file_label(cell), compose(cell)[1]
         else:
             own, first = f"<%%soar {_agent_name(cell.text)}>", 0  # the body is line 2 on
         line = error.line - first + 1
@@ -298,11 +304,11 @@ class Stepper:
             from sann.exercises import EXERCISES
 
             self.agent = EXERCISES[cell.exercise].agent(cell.text, self.out)
-        elif cell.file is None:
+        elif cell.text.startswith("%%soar"):
             self.agent = self._magic_agent(cell)
         else:
-            self.agent = Agent(out=self.out)
-            self.agent.load(compose(cell)[0], file=f"rules/{cell.file}")
+            self.agent = Agent(out=ReaderStream(self.out))
+            self.agent.load(compose(cell)[0], file=_file_label(cell))
             put_input(self.agent, cell.input)
         self.agent.trace(cell.trace)
 
@@ -310,7 +316,7 @@ class Stepper:
         """The agent a ``%%soar`` cell would run, loaded but not run."""
         line, _, body = cell.text.partition("\n")
         options = parse_line(line[len("%%soar"):])
-        agent = Agent(options.agent, seed=options.seed, out=self.out)
+        agent = Agent(options.agent, seed=options.seed, out=ReaderStream(self.out))
         for name in cell.preload:
             agent.load(rule_text(name), file=f"rules/{name}")
         for earlier in cell.before:

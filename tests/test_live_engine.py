@@ -16,6 +16,7 @@ def test_a_whole_file_runs_to_its_halt() -> None:
                             "queries": ["print S1", "preferences", "stats"]})
     assert answer["error"] is None and answer["halted"]
     assert "The problem has been solved." in answer["output"]
+    assert "System halted" not in answer["output"]  # the cell says how the run ended
     assert answer["stats"]["decisions"] == 9
     assert [q["command"] for q in answer["queries"]] == ["print S1", "preferences", "stats"]
     assert "(S1 ^" in answer["queries"][0]["text"]

@@ -7,7 +7,8 @@ const base = new URL("./", import.meta.url);
 let ready = null;
 
 const DISPATCH = `
-import json, sys, time
+import json, os, sys
+os.chdir("/home/pyodide/sann-live")  # rule files name each other from there (source ...)
 sys.path.insert(0, "/home/pyodide/sann-live")
 import sann.live as live
 
