@@ -50,6 +50,12 @@ book: $(STAMP) $(COMPILED)
 test: $(STAMP) $(COMPILED) /usr/bin/chromium
 	$(PY) -m pytest -n 2 --dist loadgroup --durations=10 tests
 
+# The built book on 127.0.0.1, where its Soar cells run (a page opened from disk runs none).
+.PHONY: serve
+serve: $(STAMP)
+	@test -f $(BOOK_HTML) || { echo "no built book: run make book first"; exit 1; }
+	$(PY) -m sann.serve book/_build/html --port $${PORT:-8000}
+
 lab: $(STAMP)
 	$(VENV)/bin/jupyter lab --allow-root --notebook-dir=book
 

@@ -10,6 +10,7 @@ import importlib
 import importlib.util
 import os
 import shutil
+import sys
 from pathlib import Path
 
 from docutils import nodes
@@ -27,6 +28,10 @@ extensions = ["myst_nb"]
 html_math_renderer = "mathml"
 exclude_patterns = ["_build", "**.ipynb_checkpoints", "README.md"]
 source_suffix = {".md": "myst-nb", ".ipynb": "myst-nb"}
+
+# --- the live book: every Soar block runs in the page (book/live_ext.py) -----------------------
+sys.path.insert(0, str(BOOK))
+extensions.append("live_ext")
 
 # --- MyST ---------------------------------------------------------------------------------------
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
