@@ -52,6 +52,7 @@ HANOI = ROOT / "rules" / "hanoi.soar"
 PLANNER = ROOT / "benchmarks" / "data" / "blocks-planner.soar"
 NAMES = [chr(ord("A") + i) for i in range(26)]
 
+sys.path.insert(0, str(ROOT))  # this checkout's engine, not an installed one
 sys.path.insert(0, str(ROOT / "tests" / "soar" / "differential"))
 import kernel as oracle  # noqa: E402  (the differential harness owns the kernel's lifecycle)
 

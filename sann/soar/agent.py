@@ -51,7 +51,7 @@ from .production import (
     same_production,
 )
 from .results import find_results
-from .rete import KernelOrder, negation_matches, prefix_tokens
+from .rete import KernelOrder, equality_vars, negation_matches, prefix_token
 from .rhs import FUNCTIONS, format_value, kernel_random
 from .trace import print_identifier, symbol_text, trace_preference, trace_wme
 
@@ -278,8 +278,8 @@ class Agent:
                                 f" {name} \n")
                 return
         self._by_shape.setdefault(key, []).append(production.name)
-        self._kernel_places[production.name] = self._kernel_order.add(production,
-                                                                      self._timetag)
+        self._kernel_places[production.name] = self._kernel_order.add(
+            production, self._timetag, self.multi_attributes)
         self.matcher.add_production(self._kernel_order.with_kernel_relations(production))
         info = ProductionInfo.of(production)
         self._load_count += 1
@@ -517,8 +517,9 @@ class Agent:
         self._collects = 0  # the takes of matcher changes so far (_collect_changes)
         # the links of the joins whose memory _check_links found emptied, before
         self._links_before: dict[int, tuple] = {}
-        # working memory by attribute (_vkey), kept once _wmes_of needs it
-        self._by_attr: dict[object, dict[WME, None]] | None = None
+        # working memory by identifier, then attribute (_vkey), kept once _candidates
+        # needs it
+        self._by_id: dict[Symbol, dict[object, dict[WME, None]]] | None = None
         # WMEs added and removed since the last trace of working-memory changes (watch 4+)
         self._traced_adds = []
         self._traced_removes: list[WME] = []
@@ -620,14 +621,8 @@ class Agent:
         if self._neg_watch:
             self._check_negations(wme)
         self.matcher.add_wme(wme)
-        by_attr = self._by_attr
-        if by_attr is not None:
-            key = _vkey(attr)
-            bucket = by_attr.get(key)
-            if bucket is None:
-                by_attr[key] = {wme: None}
-            else:
-                bucket[wme] = None
+        if self._by_id is not None:
+            _file_wme(self._by_id, wme)
         if self.trace_level >= 4:
             self._traced_adds.append(wme)
         return wme
@@ -643,13 +638,16 @@ class Agent:
             return
         del wm[timetag]
         self.matcher.remove_wme(wme)
-        by_attr = self._by_attr
-        if by_attr is not None:
+        by_id = self._by_id
+        if by_id is not None:
+            slots = by_id[wme.id]
             key = _vkey(wme.attr)
-            bucket = by_attr[key]
+            bucket = slots[key]
             del bucket[wme]
             if not bucket:
-                del by_attr[key]
+                del slots[key]
+                if not slots:
+                    del by_id[wme.id]
         value = wme.value
         if type(value) is Identifier and value.level is None:
             count = self._refs[value] - 1
@@ -1033,12 +1031,15 @@ class Agent:
         first (measured: three ``(S1 ^x v)`` made by one firing each match one rule, whose
         firings come oldest WME first), so a match is made when its oldest WME of the batch
         enters, and the matches of older WMEs are made later; matches made by no new WME
-        (a removal unblocked them) come first, as before. See ``_kernel_key``."""
+        (a removal unblocked them) come last: the kernel removes a batch's WMEs after it
+        has added them all (measured in soar_sml, the collapsed hanoi: the ^upper-disk
+        that a move's removed ^above uncovers fires before the rejections that its new
+        ^last-moved makes). See ``_kernel_key``."""
         creators = [_creator(match, start) for match in new]
         firsts: list[tuple] = []
         for creator in creators:
             made: int = creator[0]
-            firsts.append((0, made) if made <= start else (1, -made))
+            firsts.append((2, made) if made <= start else (1, -made))
         if len(new) == 2:  # the usual case, without sorting
             one: tuple
             two: tuple
@@ -1315,6 +1316,7 @@ class Agent:
             seen: set[tuple] = record[5]
             if own not in seen:
                 seen.add(own)
+                _live_tokens(seen, self._wm)
                 if own_link < record[0]:  # there now, so the memory was not empty since
                     self._join_links[serial] = (own_link, *record[1:])
                     return own_link
@@ -1322,14 +1324,13 @@ class Agent:
         self._join_links[serial] = (own_link, own, name, place, self._collects, {own})
         return own_link
 
-    def _memory_tokens(self, name: str, place: tuple, one: bool) -> list[tuple]:
-        """The tokens of the kernel's memory above the join of ``place`` (see
-        ``_join_link``), as the WMEs of the conditions ``place[1]`` (``one``: at most
-        one)."""
+    def _memory_token(self, name: str, place: tuple) -> tuple | None:
+        """A token of the kernel's memory above the join of ``place`` (see
+        ``_join_link``), as the WMEs of the conditions ``place[1]``; None if it is empty."""
         ordered = self._kernel_order.ordered(name)
         if ordered is None:
-            return []
-        return prefix_tokens(ordered, place[5], self._wmes_of, place[1], one)
+            return None
+        return prefix_token(ordered, place[5], self._candidates, place[1])
 
     def _check_links(self) -> None:
         """After a batch of WME changes: a recorded join (``_join_link``) whose token on
@@ -1350,32 +1351,49 @@ class Agent:
             if seen:
                 witness = next(iter(seen))
             else:
-                tokens = self._memory_tokens(record[2], record[3], True)
-                if not tokens:
+                found = self._memory_token(record[2], record[3])
+                if found is None:
                     del self._join_links[serial]
                     continue
-                witness = tokens[0]
+                witness = found
                 seen.add(witness)
             self._join_links[serial] = (record[0], witness, *record[2:5], seen)
 
-    def _wmes_of(self, cond: Condition) -> list[WME]:
-        """The WMEs with the condition's attribute (all, when it is not a constant), from an
-        index of working memory by attribute kept from the first call on."""
-        index = self._by_attr
+    def _candidates(self, cond: Condition, bindings: dict[str, Symbol]) -> Iterable[WME]:
+        """The WMEs that may match ``cond`` given ``bindings`` (for ``prefix_token``):
+        those of its bound identifier with its attribute (all of the identifier's, when
+        the attribute is not a constant); of every state, for a state test on an unbound
+        identifier. The index of working memory by identifier is kept from the first call
+        on."""
+        index = self._by_id
         if index is None:
-            index = self._by_attr = {}
+            index = self._by_id = {}
             for wme in self._wm.values():
-                key = _vkey(wme.attr)
-                bucket = index.get(key)
-                if bucket is None:
-                    index[key] = {wme: None}
-                else:
-                    bucket[wme] = None
+                _file_wme(index, wme)
+        ident: Symbol | None = None
+        for name in equality_vars(cond.id_test):
+            ident = bindings.get(name)
+            if ident is not None:
+                break
+        if ident is not None:
+            idents: Iterable[Symbol] = (ident,)
+        elif cond.goal is not None:
+            idents = list(self._goals)
+        else:
+            return list(self._wm.values())
         attr = cond.attr_test
-        if type(attr) is Const:
-            found = index.get(_vkey(attr.value))  # type: ignore[union-attr]
-            return list(found) if found is not None else []
-        return list(self._wm.values())
+        key = _vkey(attr.value) if type(attr) is Const else None  # type: ignore[union-attr]
+        found: list[WME] = []
+        for one in idents:
+            slots = index.get(one)
+            if slots is None:
+                continue
+            if key is not None:
+                found.extend(slots.get(key, ()))
+            else:
+                for bucket in slots.values():
+                    found.extend(bucket)
+        return found
 
     def _schedule_retraction(self, inst: Instantiation) -> None:
         if inst.retracted:
@@ -2488,12 +2506,12 @@ class Agent:
             wmes: dict[WME, None] = {}
             for cond in element.conditions:
                 if isinstance(cond, Condition):
-                    wmes.update(dict.fromkeys(self._wmes_of(cond)))
+                    wmes.update(dict.fromkeys(self._candidates(cond, bindings)))
                 else:
                     wmes.update(dict.fromkeys(self._wm.values()))
             return negation_matches(element, list(wmes), bindings)
         assert isinstance(element, Condition)
-        return negation_matches(element, self._wmes_of(element), bindings)
+        return negation_matches(element, self._candidates(element, bindings), bindings)
 
     def _negations_of(
         self, visited: list[Instantiation], level: int
@@ -2751,7 +2769,9 @@ def _entry_rank(wme: WME, starts: list[int]) -> tuple[int, int]:
 def _batch_of(starts: list[int], timetag: int) -> int:
     """``bisect_left(starts, timetag)``: the batch of a WME (see ``_entry_rank``), in
     native integers (the bisect module compares Python objects, ten times slower), and
-    searched from the end, where the batches of the WMEs asked about mostly are."""
+    searched from both ends at once, doubling the steps, where the batches of the WMEs
+    asked about mostly are: the newest, and the structure made when the run began, whose
+    search from the end alone grew with the run (four batches a decision)."""
     high = len(starts) - 1
     if high < 0 or starts[high] < timetag:
         return high + 1
@@ -2767,6 +2787,13 @@ def _batch_of(starts: list[int], timetag: int) -> int:
             low = probe
             break
         high = probe
+        probe = low + step
+        if probe >= high:
+            break
+        if starts[probe] >= timetag:
+            high = probe
+            break
+        low = probe
         step <<= 1
     while high - low > 1:
         middle = (low + high) >> 1
@@ -2816,6 +2843,31 @@ def _token_link(order: tuple[int, ...], token: tuple, places: dict[int, tuple], 
     if link_place is None:
         return (link_batch, _LATEST)
     return (link_batch, link_time, link_place[0], link_place[3])
+
+
+def _file_wme(index: dict[Symbol, dict[object, dict[WME, None]]], wme: WME) -> None:
+    """Add ``wme`` to an index of working memory by identifier, then attribute."""
+    slots = index.get(wme.id)
+    if slots is None:
+        index[wme.id] = {_vkey(wme.attr): {wme: None}}
+        return
+    key = _vkey(wme.attr)
+    bucket = slots.get(key)
+    if bucket is None:
+        slots[key] = {wme: None}
+    else:
+        bucket[wme] = None
+
+
+def _live_tokens(seen: set[tuple], wm: dict[int, WME]) -> None:
+    """Drop from a link record's ``seen`` the tokens that lost a WME (they never come
+    back: a WME that leaves is never added again), when their number has doubled since
+    the last time: a record whose token on record stays keeps seeing new tokens, one or
+    two a decision, and would otherwise keep every one of them for the rest of the run."""
+    size = len(seen)
+    if size >= 16 and not size & (size - 1):  # a power of two
+        for token in [token for token in seen if not _all_there(token, wm)]:
+            seen.discard(token)
 
 
 def _all_there(wmes: tuple, wm: dict[int, WME]) -> bool:

@@ -2732,38 +2732,128 @@ def _node_keys(reorder: Any, ordered: list) -> list[object]:
 _NODE_KEYS: dict[int, tuple[list, list[object]]] = {}
 
 
-def prefix_tokens(ordered: list, count: int, pool: Callable[[Condition], list[WME]],
-                  order: tuple[int, ...], one: bool = False) -> list[tuple]:
-    """The tokens of the kernel's beta memory above its ``count``-th condition (in
-    ``ordered``, the kernel's order: ``reorder.KCond``s), as ``introspect`` counts partial
-    matches: each token as the WMEs of the positive conditions whose written indexes are
-    ``order``. ``pool``: the WMEs a condition may match (a superset: those with its
-    attribute); ``one``: at most one token. The negations and conjunctive negations right
-    above the join are not tested: the kernel's negative and NCC nodes, which are then the
-    join's parent, keep the tokens they block in their memory too."""
+#: The WMEs that may match a condition given the bindings so far (a superset: those of its
+#: bound identifier and constant attribute, say), for the searches below.
+Candidates = Callable[[Condition, dict[str, Symbol]], Iterable[WME]]
+
+
+def prefix_token(ordered: list, count: int, candidates: Candidates,
+                 order: tuple[int, ...]) -> tuple | None:
+    """A token of the kernel's beta memory above its ``count``-th condition (in
+    ``ordered``, the kernel's order: ``reorder.KCond``s), as the WMEs of the positive
+    conditions whose written indexes are ``order``, or None when the memory is empty.
+    The negations and conjunctive negations right above the join are not tested: the
+    kernel's negative and NCC nodes, which are then the join's parent, keep the tokens
+    they block in their memory too.
+
+    A depth-first search that stops at the first token, each condition looking only at
+    the WMEs ``candidates`` gives it (those of its bound identifier): its cost is that of
+    finding one partial match, not of listing all of them (a breadth-first join over all
+    the WMEs of each attribute listed every partial match of the prefix, and a prefix of
+    several multi-valued attributes of the state has thousands)."""
     while count and (ordered[count - 1].negated or ordered[count - 1].is_ncc):
         count -= 1  # a negative or NCC node holds its blocked tokens too (no beta memory)
-    tokens: list[PartialMatch] = [({}, ())]
-    indexes: list[int] = []  # the written index of each positive condition joined
-    for k, kcond in enumerate(ordered[:count]):
-        element = kcond.element
+    chosen: list[tuple[int, Condition, WME]] = []
+    if not _prefix_search(ordered, 0, count, {}, chosen, _rechecks(ordered), candidates):
+        return None
+    by_index: dict[int, WME] = {}
+    for index, _, wme in chosen:
+        by_index.setdefault(index, wme)
+    return tuple([by_index.get(j) for j in order])
+
+
+def _prefix_search(ordered: list, k: int, count: int, bindings: dict[str, Symbol],
+                   chosen: list[tuple[int, Condition, WME]], rechecks: list[tuple[int, ...]],
+                   candidates: Candidates) -> bool:
+    """``prefix_token``'s search from condition ``k`` on, ``chosen`` the WMEs so far (a
+    function of its own: a nested one calling itself is a reference cycle, left to the
+    cyclic collector at every call)."""
+    if k == count:
+        return True
+    kcond = ordered[k]
+    element = kcond.element
+    if kcond.negated or kcond.is_ncc:
+        inner = element.conditions if kcond.is_ncc else (_positive(element),)
+        return (not _exists(inner, bindings, candidates)
+                and _prefix_search(ordered, k + 1, count, bindings, chosen, rechecks,
+                                   candidates))
+    earlier = rechecks[k]
+    for wme in candidates(element, bindings):
+        extended = _wme_fits(element, wme, bindings)
+        if extended is None or (earlier and not _still_hold(
+                tuple((chosen[j][1], chosen[j][2]) for j in earlier), extended)):
+            continue
+        chosen.append((kcond.index, element, wme))
+        if _prefix_search(ordered, k + 1, count, extended, chosen, rechecks, candidates):
+            return True
+        chosen.pop()
+    return False
+
+
+def _rechecks(ordered: list) -> list[tuple[int, ...]]:
+    """Per condition of ``ordered``, the positive conditions before it (as places in the
+    search's list of chosen WMEs) whose relational tests wait for a variable it binds
+    first: they are tested again when it joins, as the kernel's Rete moves them."""
+    hit = _RECHECKS.get(id(ordered))
+    if hit is not None and hit[0] is ordered:
+        return hit[1]
+    bound: set[str] = set()
+    waiting: list[set[str]] = []  # per positive condition so far: its relational variables
+    rechecks: list[tuple[int, ...]] = []
+    for kcond in ordered:
         if kcond.negated or kcond.is_ncc:
-            inner: list[WME] = []
-            for cond in (element.conditions if kcond.is_ncc else (element,)):
-                inner += pool(cond)
-            tokens = [t for t in tokens if not negation_matches(element, inner, t[0])]
-        else:
-            tokens = join_condition(element, tokens, pool(element), one and k == count - 1)
-            indexes.append(kcond.index)
-        if not tokens:
-            return []
-    found: list[tuple] = []
-    for _, pairs in tokens:
-        by_index: dict[int, WME] = {}
-        for index, (_, wme) in zip(indexes, pairs, strict=True):
-            by_index.setdefault(index, wme)
-        found.append(tuple([by_index.get(j) for j in order]))
-    return found
+            rechecks.append(())
+            continue
+        fields = _fields(kcond.element)
+        new = {name for test in fields for name in equality_vars(test)} - bound
+        rechecks.append(tuple(j for j, names in enumerate(waiting) if names & new))
+        bound |= new
+        waiting.append({name for test in fields for name in relational_vars(test)})
+    if len(_RECHECKS) >= 4096:
+        _RECHECKS.clear()
+    _RECHECKS[id(ordered)] = (ordered, rechecks)
+    return rechecks
+
+
+_RECHECKS: dict[int, tuple[list, list[tuple[int, ...]]]] = {}
+
+
+def _positive(cond: Condition) -> Condition:
+    return Condition(cond.id_test, cond.attr_test, cond.value_test,
+                     acceptable=cond.acceptable, goal=cond.goal)
+
+
+def _exists(elements: tuple[ConditionElement, ...], bindings: dict[str, Symbol],
+            candidates: Candidates) -> bool:
+    """Whether ``elements`` (one scope: a conjunctive negation's conditions) have a match
+    given ``bindings``: ``brute_force_solutions`` depth first over ``candidates``, the
+    positive conditions taken on a bound identifier first where one is."""
+    positives = [e for e in elements if isinstance(e, Condition) and not e.negated]
+    negations = [e for e in elements if not (isinstance(e, Condition) and not e.negated)]
+    return _exists_search(positives, dict(bindings), [], negations, candidates)
+
+
+def _exists_search(left: list[Condition], current: dict[str, Symbol],
+                   pairs: list[tuple[Condition, WME]], negations: list[ConditionElement],
+                   candidates: Candidates) -> bool:
+    """``_exists`` with the positive conditions ``left`` to match and ``pairs`` matched."""
+    if not left:
+        return (all(_final_tests_hold(cond, wme, current) for cond, wme in pairs)
+                and not any(_exists(n.conditions if isinstance(n, ConjunctiveNegation)
+                                    else (_positive(n),), current, candidates)  # type: ignore[arg-type]
+                            for n in negations))
+    pick = next((c for c in left if any(name in current
+                                        for name in equality_vars(c.id_test))), left[0])
+    rest = [c for c in left if c is not pick]
+    for wme in candidates(pick, current):
+        extended = _wme_fits(pick, wme, current)
+        if extended is None:
+            continue
+        pairs.append((pick, wme))
+        if _exists_search(rest, extended, pairs, negations, candidates):
+            return True
+        pairs.pop()
+    return False
 
 
 class KernelOrder:
@@ -2807,12 +2897,15 @@ class KernelOrder:
         path.append((parent, key, node))
         return node
 
-    def add(self, production: Production, now: int
+    def add(self, production: Production, now: int, multi: dict[str, int] | None = None
             ) -> dict[int, tuple[int, tuple[int, ...], int, tuple[int, ...]]]:
+        """Place a new production's conditions in the node tree (see the class);
+        ``multi``: the ``multi-attributes`` counts in force, which the kernel's reorderer
+        weighs when the production is added."""
         reorder = self._reorder
         for value in reorder._constants(production):
             self._ages.setdefault((type(value), value), len(self._ages))
-        ordered = reorder.kernel_conditions(production, self._ages, {})
+        ordered = reorder.kernel_conditions(production, self._ages, dict(multi or {}))
         self._ordered[production.name] = ordered
         path: list[tuple[_KernelNode, object, _KernelNode]] = []
         node, is_join = self._top, False
