@@ -131,6 +131,9 @@ class Agent:
         self.max_gp = 20000  # most productions one gp may make (the kernel's default)
         self.multi_attributes: dict[str, int] = {}
         self.warnings = True
+        #: when the kernel would learn chunks (``chunk always|never|only|except``): this
+        #: engine does not learn, so it runs only with ``never``
+        self.learning = "never"
         self._gensym_counter = 0
         self.matcher = self._matcher_class()
         # the kernel Rete's node tree, for the order it makes matches in (_kernel_key)
@@ -358,6 +361,11 @@ class Agent:
         """Run until halt or interrupt, or until ``decisions`` more decisions were made."""
         if decisions is not None and decisions < 0:
             raise SoarRuntimeError(f"run: decision count must be >= 0, got {decisions}")
+        if self.learning != "never":
+            raise SoarRuntimeError(
+                f"run: learning is on ('chunk {self.learning}'), and this engine does not "
+                "learn chunks: turn it off with 'chunk never' (or 'learn --off') first"
+            )
         self._stop = False
         self._halt_note = ""
         target = None if decisions is None else self._decisions + self._owed(decisions)
