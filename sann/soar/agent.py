@@ -534,6 +534,7 @@ class Agent:
         self._removed_size = 0
         self._removed_limit = 4096
         self._removed_now: list[WME] = []  # removed since the matcher's changes were taken
+        self._last_removed: list[WME] = []  # removed in the batch taken last
         self._removals = 0  # WMEs removed so far (their order in a batch)
         # WMEs added and removed since the last trace of working-memory changes (watch 4+)
         self._traced_adds = []
@@ -1032,6 +1033,8 @@ class Agent:
             self._batch_starts.append(start)
         if self._removed_now:
             self._file_removals()
+        elif self._last_removed:
+            self._last_removed = []
         if self._join_links and (new or gone):
             self._check_links()
         elif self._links_before:
@@ -1063,7 +1066,7 @@ class Agent:
                 bucket = slots[key] = {}
             bucket[wme] = (-batch, -self._removals)
             self._removed_size += 1
-        self._removed_now = []
+        self._last_removed, self._removed_now = self._removed_now, []
         if self._removed_size >= self._removed_limit:
             for ident in [i for i in removed if i not in self._refs and i not in self._goals]:
                 del removed[ident]
@@ -1138,9 +1141,13 @@ class Agent:
         ^last-moved makes). See ``_kernel_key``."""
         creators = [_creator(match, start) for match in new]
         firsts: list[tuple] = []
-        for creator in creators:
+        removed = self._last_removed
+        for k, creator in enumerate(creators):
             made: int = creator[0]
-            firsts.append((2, made) if made <= start else (1, -made))
+            if made <= start or (removed and self._unblocked_now(new[k], removed)):
+                firsts.append((2, made))
+            else:
+                firsts.append((1, -made))
         if len(new) == 2:  # the usual case, without sorting
             one: tuple
             two: tuple
@@ -1154,6 +1161,24 @@ class Agent:
             keys = self._tied_keys(firsts, new, creators, shared)
         order = sorted(range(len(new)), key=keys.__getitem__)
         return [new[k] for k in order]
+
+    @staticmethod
+    def _unblocked_now(match: object, removed: list[WME]) -> bool:
+        """Whether a WME the batch removed matched a negated condition of ``match``: its
+        token was blocked when its new WMEs entered, and the match was made when the
+        removal unblocked it, after the batch's additions (measured in soar_sml, the
+        farmer: never-undo, whose new operator enters while the ^failure it negates is
+        still there, fires before the result*farmer matches of the same batch)."""
+        production = match.production  # type: ignore[attr-defined]
+        bindings = match.bindings  # type: ignore[attr-defined]
+        for cond in production.conditions:
+            if type(cond) is Condition and cond.negated:
+                positive = Condition(cond.id_test, cond.attr_test, cond.value_test,
+                                     acceptable=cond.acceptable, goal=cond.goal)
+                for wme in removed:
+                    if _wme_fits(positive, wme, bindings) is not None:
+                        return True
+        return False
 
     def _tied_keys(self, firsts: list[tuple], new: list, creators: list[tuple],
                    shared: set[tuple] | None) -> list[tuple]:
@@ -1424,8 +1449,33 @@ class Agent:
                     self._join_links[serial] = (own_link, *record[1:])
                     return own_link
             return record[0]  # type: ignore[no-any-return]
+        starts = self._batch_starts
+        if own_link[0] == len(starts) and starts:  # made now, and no link on record
+            older = self._older_token(name, place, starts[-1])
+            if older is not None:
+                own, own_link = older, _token_link(place[1], older, places, born,
+                                                   born_batch, starts)
         self._join_links[serial] = (own_link, own, name, place, self._collects, {own})
         return own_link
+
+    def _older_token(self, name: str, place: tuple, start: int) -> tuple | None:
+        """A token of the kernel's memory above the join of ``place`` made before this
+        batch (of WMEs no newer than ``start``, those the batch removed included: the
+        kernel takes them out after the batch's additions), or None. A join whose link
+        was never asked for has no record (``_join_link``): its memory did not empty when
+        a new token came in if such a token was there (measured in soar_sml, the farmer
+        crossing with the wolf: the new (F1 ^on R4) replaces (F1 ^on L2) in the tokens of
+        the passenger's ^on join, which keeps its place before result*stays's join)."""
+        ordered = self._kernel_order.ordered(name)
+        if ordered is None:
+            return None
+        removed = self._last_removed
+
+        def candidates(cond: Condition, bindings: dict[str, Symbol]) -> list[WME]:
+            found = [wme for wme in self._candidates(cond, bindings) if wme.timetag <= start]
+            return found + removed if removed else found
+
+        return prefix_token(ordered, place[5], candidates, place[1])
 
     def _memory_token(self, name: str, place: tuple) -> tuple | None:
         """A token of the kernel's memory above the join of ``place`` (see
