@@ -340,3 +340,34 @@ def test_unblocked_tokens_are_made_when_their_negation_unblocks(case: str, tmp_p
     ours = writes(_our_trace(text, 10, 1))
     assert len(ours) >= 3
     assert ours == writes(_kernel_trace(text, 10, tmp_path, 1))
+
+
+# p*eaten's farmer ^on join is unlinked while the wolf and the goat are on different
+# banks, and relinked when the wolf crosses (stage 1): the kernel puts it into the ^on
+# alpha memory's list just before its linked ancestor join there (the goat's ^on), which
+# was linked at init, before p*alone's (linked by ^flag, later), not at the tail: when
+# the farmer crosses, p*eaten's match is made first and p*alone fires first (farmer:
+# cross-alone fires before goat-eaten after the third crossing, seeds 2, 3, 5).
+RELINK_BEFORE_ANCESTOR = UNBLOCK_BASE + """
+sp {init*a (state <s> ^operator.name init)
+   --> (<s> ^stage 0 ^item <f> <w> <g> ^bank <l> <r>) (<f> ^name farmer ^on <l> ^when 2)
+       (<w> ^name wolf ^on <r> ^when 1) (<g> ^name goat ^on <l>)}
+sp {flag (state <s> ^operator.name next ^stage 0) --> (<s> ^flag yes)}
+sp {move (state <s> ^operator.name next ^stage <n> ^item <i> ^bank {<r> <> <l>})
+       (<i> ^when <n> ^on <l>)
+   --> (<i> ^on <l> - <r>)}
+sp {p*alone (state <s> ^superstate nil ^flag yes ^item <f>) (<f> ^name farmer ^on <b>)
+   --> (write |p alone | <b> (crlf))}
+sp {p*eaten (state <s> ^superstate nil ^item <g> <w>) (<g> ^name goat ^on <b>)
+       (<w> ^name wolf ^on <b>) (<s> ^item <f>) (<f> ^name farmer ^on {<> <b> <fb>})
+   --> (write |p eaten | <fb> (crlf))}
+"""
+
+
+def test_a_relinked_join_goes_before_its_linked_ancestor(tmp_path) -> None:
+    def writes(trace: str) -> list[str]:
+        return re.findall(r"p (?:alone|eaten) \w+", trace)
+
+    ours = writes(_our_trace(RELINK_BEFORE_ANCESTOR, 10, 1))
+    assert ours == ["p alone L2", "p alone R4", "p eaten R4"]
+    assert ours == writes(_kernel_trace(RELINK_BEFORE_ANCESTOR, 10, tmp_path, 1))
