@@ -1393,26 +1393,10 @@ class Agent:
                     other = places[j]
                     if other[0] > place[0] or (other[0] == place[0] and other[5] < place[5]):
                         place = other
-        linked = self._link_key(match.production.name, place, places,  # type: ignore[attr-defined]
-                                wmes)
-        if not tokens:
-            return (newest, place[0], linked, place[3])
-        return (newest, place[0], linked, (place[3][0],),
-                *_token_order(wmes, place, self._batch_starts,
-                              self._prefix_ranks(match.production.name,  # type: ignore[attr-defined]
-                                                 place, wmes)))
-
-    def _link_key(self, name: str, place: tuple, places: dict[int, tuple],
-                  wmes: tuple) -> tuple:
-        """The place of the join of ``place`` in its alpha memory's list, as a sort key.
-        When its join was made, or relinked (see KernelOrder): the entry of the latest
-        WME before it, in the order the kernel's Rete took the WMEs in (the negated
-        _entry_rank). Joins relinked by one WME's entry go in the order it activated
-        them: its (* ^attr *) memory before (* ^attr value), each's joins by path. A join
-        relinked below an ancestor join on the same alpha memory goes just before the
-        ancestor's place, after those relinked there before it (measured in soar_sml, the
-        farmer: goat-eaten's farmer ^on join, relinked when the wolf came back to the
-        goat, is activated before the cross-alone proposal's ^on join)."""
+        # When its join was made, or relinked (see KernelOrder): the entry of the latest
+        # WME before it, in the order the kernel's Rete took the WMEs in (the negated
+        # _entry_rank). Joins relinked by one WME's entry go in the order it activated
+        # them: its (* ^attr *) memory before (* ^attr value), each's joins by path.
         born: int = place[2]
         starts = self._batch_starts
         link_batch = self._born_batches.get(born)
@@ -1420,13 +1404,15 @@ class Agent:
             link_batch = self._born_batches[born] = _batch_of(starts, born)
         own = tuple([wmes[j] for j in place[1]])
         linked = _token_link(place[1], own, places, born, link_batch, starts)
-        if linked[1] == _LATEST:  # linked since it was made (its memory never emptied)
-            return (*linked, 1)
-        linked = self._join_link(name, place, places, born, link_batch, own, linked)
-        ancestor: int = place[8]
-        if ancestor < 0 or linked[1] == _LATEST:
-            return (*linked, 1)
-        return (*self._link_key(name, places[ancestor], places, wmes)[:-1], 0, linked)
+        if linked[1] != _LATEST:  # else linked since it was made (its memory never emptied)
+            linked = self._join_link(match.production.name,  # type: ignore[attr-defined]
+                                     place, places, born, link_batch, own, linked)
+        if not tokens:
+            return (newest, place[0], linked, place[3])
+        return (newest, place[0], linked, (place[3][0],),
+                *_token_order(wmes, place, self._batch_starts,
+                              self._prefix_ranks(match.production.name,  # type: ignore[attr-defined]
+                                                 place, wmes)))
 
     def _join_link(self, name: str, place: tuple, places: dict[int, tuple], born: int,
                    born_batch: int, own: tuple, own_link: tuple) -> tuple:

@@ -2817,15 +2817,6 @@ def _same_alpha(one: Condition, other: Condition) -> bool:
     return not (type(a) is Const and type(b) is Const and not same_symbol(a.value, b.value))
 
 
-def _alpha_key(cond: Condition) -> tuple:
-    """The kernel's alpha memory of a positive condition: its constant attribute and
-    value (``None``: any) and whether it matches acceptable preferences."""
-    attr, value = cond.attr_test, cond.value_test
-    return (cond.acceptable,
-            _hkey(attr.value) if type(attr) is Const else None,  # type: ignore[union-attr]
-            _hkey(value.value) if type(value) is Const else None)  # type: ignore[union-attr]
-
-
 def _node_keys(reorder: Any, ordered: list) -> list[object]:
     """The keys of the kernel's nodes for conditions in the kernel's order: their text with
     the variables numbered in order of appearance, so that equal prefixes share nodes.
@@ -2992,10 +2983,7 @@ class KernelOrder:
     and the path below the join cut at each positive join after it, with that join's
     written index in between: the kernel passes each token down to every child before it
     makes the next, so the matches one activation makes are ordered depth first
-    (``Agent._token_order``). Last, the written index of the nearest positive condition
-    before it on the same alpha memory (-1: none): a join relinked while that ancestor's
-    join is linked goes into the alpha memory's list just before the ancestor's, not at
-    its tail (the kernel's ``relink_to_right_mem``)."""
+    (``Agent._token_order``)."""
 
     def __init__(self) -> None:
         from sann.soar import reorder
@@ -3073,10 +3061,8 @@ class KernelOrder:
                     steps.append(later)
                     start = later_length
                 steps.append(tuple(below[start:]))
-                ancestor = next((j for j, _, _ in reversed(joins[:k]) if _alpha_key(
-                    conditions[j]) == _alpha_key(cond)), -1)  # type: ignore[arg-type]
                 places[index] = (mask, before, join.born, (join.serial, *below[length:]),
-                                 twins, position, pnode.born, tuple(steps), ancestor)
+                                 twins, position, pnode.born, tuple(steps))
         self._places[production.name] = places  # shared with the caller: see restart
         return places
 
