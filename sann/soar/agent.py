@@ -51,7 +51,7 @@ from .production import (
     same_production,
 )
 from .results import find_results
-from .rete import KernelOrder, equality_vars, negation_matches, prefix_token
+from .rete import KernelOrder, _wme_fits, equality_vars, negation_matches, prefix_token
 from .rhs import FUNCTIONS, format_value, kernel_random
 from .trace import print_identifier, symbol_text, trace_preference, trace_wme
 
@@ -530,6 +530,14 @@ class Agent:
         self._by_id: dict[Symbol, dict[object, dict[WME, None]]] | None = None
         # working memory by attribute (_vkey), kept once _wmes_of needs it
         self._by_attr: dict[object, dict[WME, None]] | None = None
+        # removed WMEs by identifier, then attribute (_vkey), with when the kernel's Rete
+        # took each out (_removal_rank): the unblocking of the negations they matched
+        self._removed: dict[Symbol, dict[object, dict[WME, tuple[int, int]]]] = {}
+        self._removed_size = 0
+        self._removed_limit = 4096
+        self._removed_now: list[WME] = []  # removed since the matcher's changes were taken
+        self._last_removed: list[WME] = []  # removed in the batch taken last
+        self._removals = 0  # WMEs removed so far (their order in a batch)
         # WMEs added and removed since the last trace of working-memory changes (watch 4+)
         self._traced_adds = []
         self._traced_removes: list[WME] = []
@@ -666,6 +674,7 @@ class Agent:
             return
         del wm[timetag]
         self.matcher.remove_wme(wme)
+        self._removed_now.append(wme)
         by_id = self._by_id
         if by_id is not None:
             slots = by_id[wme.id]
@@ -1049,6 +1058,10 @@ class Agent:
         start, self._batch_start = self._batch_start, self._timetag
         if start != self._timetag:
             self._batch_starts.append(start)
+        if self._removed_now:
+            self._file_removals()
+        elif self._last_removed:
+            self._last_removed = []
         if self._join_links and (new or gone):
             self._check_links()
         elif self._links_before:
@@ -1059,6 +1072,89 @@ class Agent:
             if len(new) > 1 and not in_match_order:
                 new = self._batch_sorted(new, start)
             self._queue_matches(new)
+
+    def _file_removals(self) -> None:
+        """File the WMEs removed in the batch just taken with when the kernel's Rete took
+        them out, as an ``_entry_rank``: after the batch's additions (``_batch_sorted``),
+        the last requested first (as watch 4 lists them); the batch is the latest that
+        added a WME (this one, if it added any). Records of identifiers no
+        longer in working memory are dropped when their number has doubled: no token can
+        bind such an identifier again."""
+        batch = len(self._batch_starts)
+        removed = self._removed
+        for wme in reversed(self._removed_now):
+            self._removals += 1
+            slots = removed.get(wme.id)
+            if slots is None:
+                slots = removed[wme.id] = {}
+            key = _vkey(wme.attr)
+            bucket = slots.get(key)
+            if bucket is None:
+                bucket = slots[key] = {}
+            bucket[wme] = (-batch, -self._removals)
+            self._removed_size += 1
+        self._last_removed, self._removed_now = self._removed_now, []
+        if self._removed_size >= self._removed_limit:
+            for ident in [i for i in removed if i not in self._refs and i not in self._goals]:
+                del removed[ident]
+            self._removed_size = sum(len(bucket) for slots in removed.values()
+                                     for bucket in slots.values())
+            self._removed_limit = max(4096, 2 * self._removed_size)
+
+    def _unblock_rank(self, cond: Condition, bindings: dict[str, Symbol]) -> tuple | None:
+        """When the kernel's negative node of ``cond`` (a negated condition) last passed
+        on a token of ``bindings``: the removal of the latest removed WME that matched it
+        (the negation holds now, so that removal was of its last blocker), as an
+        ``_entry_rank``; None when no such WME was removed (or its identifier is not
+        bound: the token was then made by its positive WMEs)."""
+        ident: Symbol | None = None
+        for name in equality_vars(cond.id_test):
+            ident = bindings.get(name)
+            if ident is not None:
+                break
+        if ident is None:
+            return None
+        slots = self._removed.get(ident)
+        if slots is None:
+            return None
+        attr = cond.attr_test
+        if type(attr) is Const:
+            bucket = slots.get(_vkey(attr.value))  # type: ignore[union-attr]
+            buckets = [bucket] if bucket is not None else []
+        else:
+            buckets = list(slots.values())
+        positive = Condition(cond.id_test, cond.attr_test, cond.value_test,
+                             acceptable=cond.acceptable, goal=cond.goal)
+        latest: tuple | None = None
+        for bucket in buckets:
+            for wme, rank in bucket.items():
+                if (latest is None or rank < latest) and _wme_fits(positive, wme, bindings):
+                    latest = rank
+        return latest
+
+    def _prefix_ranks(self, name: str, place: tuple, wmes: tuple) -> list[tuple | None]:
+        """Per condition above the join of ``place`` in the kernel's order (its positive
+        conditions ``place[1]`` and the negated conditions among them): when the kernel's
+        Rete took the WME in (``_entry_rank``), or, for a negation, last passed its token
+        on (``_unblock_rank``; None: never, or a conjunctive negation)."""
+        starts = self._batch_starts
+        ordered = self._kernel_order.ordered(name)
+        if ordered is None or not any(kcond.negated for kcond in ordered[:place[5]]):
+            return [_entry_rank(wmes[j], starts) for j in place[1]]
+        ranks: list[tuple | None] = []
+        bindings: dict[str, Symbol] = {}
+        seen: set[int] = set()
+        for kcond in ordered[:place[5]]:
+            if kcond.is_ncc:
+                ranks.append(None)
+            elif kcond.negated:
+                ranks.append(self._unblock_rank(kcond.element, bindings))
+            elif kcond.index not in seen:
+                seen.add(kcond.index)
+                wme = wmes[kcond.index]
+                ranks.append(_entry_rank(wme, starts))
+                bindings = _wme_fits(kcond.element, wme, bindings) or bindings
+        return ranks
 
     def _batch_sorted(self, new: list, start: int) -> list:
         """New matches in the order the kernel's Rete made them from one batch of WME
@@ -1072,9 +1168,13 @@ class Agent:
         ^last-moved makes). See ``_kernel_key``."""
         creators = [_creator(match, start) for match in new]
         firsts: list[tuple] = []
-        for creator in creators:
+        removed = self._last_removed
+        for k, creator in enumerate(creators):
             made: int = creator[0]
-            firsts.append((2, made) if made <= start else (1, -made))
+            if made <= start or (removed and self._unblocked_now(new[k], removed)):
+                firsts.append((2, made))
+            else:
+                firsts.append((1, -made))
         if len(new) == 2:  # the usual case, without sorting
             one: tuple
             two: tuple
@@ -1088,6 +1188,24 @@ class Agent:
             keys = self._tied_keys(firsts, new, creators, shared)
         order = sorted(range(len(new)), key=keys.__getitem__)
         return [new[k] for k in order]
+
+    @staticmethod
+    def _unblocked_now(match: object, removed: list[WME]) -> bool:
+        """Whether a WME the batch removed matched a negated condition of ``match``: its
+        token was blocked when its new WMEs entered, and the match was made when the
+        removal unblocked it, after the batch's additions (measured in soar_sml, the
+        farmer: never-undo, whose new operator enters while the ^failure it negates is
+        still there, fires before the result*farmer matches of the same batch)."""
+        production = match.production  # type: ignore[attr-defined]
+        bindings = match.bindings  # type: ignore[attr-defined]
+        for cond in production.conditions:
+            if type(cond) is Condition and cond.negated:
+                positive = Condition(cond.id_test, cond.attr_test, cond.value_test,
+                                     acceptable=cond.acceptable, goal=cond.goal)
+                for wme in removed:
+                    if _wme_fits(positive, wme, bindings) is not None:
+                        return True
+        return False
 
     def _tied_keys(self, firsts: list[tuple], new: list, creators: list[tuple],
                    shared: set[tuple] | None) -> list[tuple]:
@@ -1319,7 +1437,9 @@ class Agent:
         if not tokens:
             return (newest, place[0], linked, place[3])
         return (newest, place[0], linked, (place[3][0],),
-                *_token_order(wmes, place, self._batch_starts))
+                *_token_order(wmes, place, self._batch_starts,
+                              self._prefix_ranks(match.production.name,  # type: ignore[attr-defined]
+                                                 place, wmes)))
 
     def _join_link(self, name: str, place: tuple, places: dict[int, tuple], born: int,
                    born_batch: int, own: tuple, own_link: tuple) -> tuple:
@@ -1356,8 +1476,33 @@ class Agent:
                     self._join_links[serial] = (own_link, *record[1:])
                     return own_link
             return record[0]  # type: ignore[no-any-return]
+        starts = self._batch_starts
+        if own_link[0] == len(starts) and starts:  # made now, and no link on record
+            older = self._older_token(name, place, starts[-1])
+            if older is not None:
+                own, own_link = older, _token_link(place[1], older, places, born,
+                                                   born_batch, starts)
         self._join_links[serial] = (own_link, own, name, place, self._collects, {own})
         return own_link
+
+    def _older_token(self, name: str, place: tuple, start: int) -> tuple | None:
+        """A token of the kernel's memory above the join of ``place`` made before this
+        batch (of WMEs no newer than ``start``, those the batch removed included: the
+        kernel takes them out after the batch's additions), or None. A join whose link
+        was never asked for has no record (``_join_link``): its memory did not empty when
+        a new token came in if such a token was there (measured in soar_sml, the farmer
+        crossing with the wolf: the new (F1 ^on R4) replaces (F1 ^on L2) in the tokens of
+        the passenger's ^on join, which keeps its place before result*stays's join)."""
+        ordered = self._kernel_order.ordered(name)
+        if ordered is None:
+            return None
+        removed = self._last_removed
+
+        def candidates(cond: Condition, bindings: dict[str, Symbol]) -> list[WME]:
+            found = [wme for wme in self._candidates(cond, bindings) if wme.timetag <= start]
+            return found + removed if removed else found
+
+        return prefix_token(ordered, place[5], candidates, place[1])
 
     def _memory_token(self, name: str, place: tuple) -> tuple | None:
         """A token of the kernel's memory above the join of ``place`` (see
@@ -1888,7 +2033,10 @@ class Agent:
                 self._remove_wme(wmes.pop(key))
 
     def _diff_slot(self, slot: Slot, adds: list, removes: list[WME]) -> None:
-        """A non-operator slot holds every acceptable value that is not rejected."""
+        """A non-operator slot holds every acceptable value that is not rejected. Its WMEs
+        that go are removed newest first, as the kernel's slot lists them (measured in
+        soar_sml, n-queens: two ^tried WMEs of S1 leave the Rete oldest first, as watch 4
+        prints them)."""
         prefs = slot.prefs
         wmes = slot.wmes
         if not prefs:  # the slot's last preference went: so do all its WMEs
@@ -1905,7 +2053,8 @@ class Agent:
                 key: object = value if type(value) is not float else (float, value)
                 if key in wmes:
                     if len(wmes) > 1:
-                        for other in [k for k in wmes if k != key or type(k) is not type(key)]:
+                        for other in [k for k in reversed(wmes)
+                                      if k != key or type(k) is not type(key)]:
                             removes.append(wmes.pop(other))
                     return
                 if wmes:
@@ -1926,7 +2075,7 @@ class Agent:
             for ptype in (REJECT, PROHIBIT):
                 for pref in prefs.get(ptype, ()):
                     wanted.pop(_vkey(pref.value), None)
-        for key in [k for k in wmes if k not in wanted]:
+        for key in [k for k in reversed(wmes) if k not in wanted]:
             removes.append(wmes.pop(key))
         for key, value in wanted.items():
             if key not in wmes:
@@ -1944,7 +2093,7 @@ class Agent:
         present = {
             p.value if type(p.value) is not float else (float, p.value) for p in acceptable
         }
-        gone = [key for key in wmes if key not in present]
+        gone = [key for key in reversed(wmes) if key not in present]
         key: object
         for key in gone:
             removes.append(wmes.pop(key))
@@ -2560,12 +2709,12 @@ class Agent:
             wmes: dict[WME, None] = {}
             for cond in element.conditions:
                 if isinstance(cond, Condition):
-                    wmes.update(dict.fromkeys(self._wmes_of(cond)))
+                    wmes.update(dict.fromkeys(self._candidates(cond, bindings)))
                 else:
                     wmes.update(dict.fromkeys(self._wm.values()))
             return negation_matches(element, list(wmes), bindings)
         assert isinstance(element, Condition)
-        return negation_matches(element, self._wmes_of(element), bindings)
+        return negation_matches(element, self._candidates(element, bindings), bindings)
 
     def _negations_of(
         self, visited: list[Instantiation], level: int
@@ -2805,11 +2954,15 @@ def _latest_first(keys: list) -> list[int]:
 
 
 def _move_values(wmes: dict[object, WME], removes: list[WME]) -> None:
-    """Empty a slot's WMEs into ``removes``, in order (a loop: mypyc's ``list.extend`` of
-    a dict's values goes through the generic iterator protocol, several times slower for
-    the usual one WME)."""
-    for wme in wmes.values():
-        removes.append(wme)
+    """Empty a slot's WMEs into ``removes``, newest first (a loop: mypyc's ``list.extend``
+    of a dict's values goes through the generic iterator protocol, several times slower
+    for the usual one WME)."""
+    if len(wmes) == 1:
+        for wme in wmes.values():
+            removes.append(wme)
+    else:
+        for wme in reversed(wmes.values()):
+            removes.append(wme)
     wmes.clear()
 
 
@@ -2946,24 +3099,32 @@ def _shared(firsts: list[tuple]) -> set[tuple]:
     return shared
 
 
-def _creation_key(ranks: list[tuple[int, int]], sign: int) -> tuple:
+def _creation_key(ranks: list[tuple | None], sign: int) -> tuple:
     """The order the kernel's Rete made tokens in, from the ``_entry_rank``s of their
-    WMEs in its condition order (``sign`` 1: made first first; -1: the reverse). A token
-    was made when its latest WME entered: by a right activation that visited the parent's
-    tokens latest made first, then by left activations down to here, each visiting its
-    alpha memory's WMEs latest entered first."""
-    if not ranks:
+    WMEs in its condition order (``sign`` 1: made first first; -1: the reverse), and of
+    the last unblocking of its negations (``Agent._prefix_ranks``; None: not known). A
+    token was made when its latest WME entered or its latest negation unblocked it: by a
+    right activation that visited the parent's tokens latest made first (or a negative
+    node passing the one token on), then by left activations down to here, each visiting
+    its alpha memory's WMEs latest entered first (a negative node, passed through, adds
+    nothing to the order: measured in soar_sml, n-queens with indifferent-selection
+    --first: the squares of a column unblocked at decisions 7, 10 and 11 are proposed
+    again in that order, after the backtrack at decision 12)."""
+    known = [k for k in range(len(ranks)) if ranks[k] is not None]
+    if not known:
         return ()
-    k = min(range(len(ranks)), key=ranks.__getitem__)  # the latest entered
-    latest = ranks[k]
+    k = min(known, key=ranks.__getitem__)  # the latest entered
+    latest: tuple = ranks[k]  # type: ignore[assignment]
+    after = [r for r in ranks[k + 1:] if r is not None]
     return (
         (-sign * latest[0], -sign * latest[1]),
         *_creation_key(ranks[:k], -sign),
-        *[(sign * r[0], sign * r[1]) for r in ranks[k + 1:]],
+        *[(sign * r[0], sign * r[1]) for r in after],
     )
 
 
-def _token_order(wmes: tuple, place: tuple, starts: list[int]) -> tuple:
+def _token_order(wmes: tuple, place: tuple, starts: list[int],
+                 before: list[tuple | None]) -> tuple:
     """The order in which one WME's activation of a join makes several matches, as the
     kernel's Rete does (measured in soar_sml: two ``^thing`` WMEs of one firing, then a
     ``^count`` joined after them, fire the proposal of the older ``^thing`` first; items
@@ -2974,7 +3135,6 @@ def _token_order(wmes: tuple, place: tuple, starts: list[int]) -> tuple:
     alternates the path to the next join and the rank of that join's WME (depth first:
     measured in soar_sml, (S1 ^go n) below the shared ^obj join makes pb of X2, pa of X2,
     then pb of X1)."""
-    before = [_entry_rank(wmes[j], starts) for j in place[1]]
     order: list[tuple] = [_creation_key(before, -1)]
     steps: tuple = place[7]
     for k in range(len(steps)):

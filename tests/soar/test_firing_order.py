@@ -263,3 +263,111 @@ def test_tokens_below_a_shared_join_go_down_one_at_a_time(tmp_path) -> None:
     ours = writes(_our_trace(DEPTH_FIRST, 8, 1))
     assert ours[:3] == ["pb 0 1", "pa 0 5", "pb 0 2"]
     assert ours == writes(_kernel_trace(DEPTH_FIRST, 8, tmp_path, 1))
+
+
+# A token that a negation blocked is made again when the negation's last blocker leaves,
+# and goes to the head of the memory below it then: the matches a new (S1 ^go k) makes
+# below the negation fire in the order their objects were unblocked (oldest first), not
+# in the order their WMEs entered. n-queens (indifferent-selection --first) re-proposes
+# the squares of a column in that order after a backtrack.
+UNBLOCK_BASE = """
+sp {init (state <s> ^superstate nil -^stage) --> (<s> ^operator <o> + !) (<o> ^name init)}
+sp {next (state <s> ^superstate nil ^stage <n> < 6) --> (<s> ^operator <o> + !) (<o> ^name next)}
+sp {next*a (state <s> ^operator.name next ^stage <n>) --> (<s> ^stage <n> - (+ <n> 1))}
+"""
+
+UNBLOCKS = {
+    # the ^flag of n=3 leaves at stage 1, of n=1 at stage 2, of n=2 at stage 3
+    "one-a-decision": """
+sp {init*a (state <s> ^operator.name init) --> (<s> ^stage 0 ^obj <a> <b> <c>)
+   (<a> ^kind k ^n 1 ^flag 2) (<b> ^kind k ^n 2 ^flag 3) (<c> ^kind k ^n 3 ^flag 1)}
+sp {unflag (state <s> ^operator.name next ^stage <n> ^obj <x>) (<x> ^flag <n>)
+   --> (<x> ^flag <n> -)}
+sp {go (state <s> ^superstate nil ^stage 4) --> (<s> ^go k)}
+sp {p (state <s> ^superstate nil ^obj <x>) (<x> -^flag ^kind <k> ^n <v>) (<s> ^go <k>)
+   --> (write |p | <v> (crlf))}
+""",
+    # three (S1 ^done X) of one slot leave in one batch: the kernel requests a slot's
+    # WMEs newest first, and takes a batch's removals out the last requested first
+    "one-batch": """
+sp {init*a (state <s> ^operator.name init) --> (<s> ^stage 0 ^obj <a> <b> <c> <d>)
+   (<a> ^kind k ^n 1 ^when 2) (<b> ^kind k ^n 2 ^when 1) (<c> ^kind k ^n 3 ^when 0)
+   (<d> ^kind k ^n 4 ^when 1)}
+sp {mark (state <s> ^operator.name next ^stage <n> ^obj <x>) (<x> ^when <n>)
+   --> (<s> ^done <x>)}
+sp {unmark (state <s> ^operator.name next ^stage 3 ^done <x>) --> (<s> ^done <x> -)}
+sp {go (state <s> ^superstate nil ^stage 5) --> (<s> ^go k)}
+sp {p (state <s> ^superstate nil ^obj <x>) -(<s> ^done <x>) (<x> ^kind <k> ^n <v>)
+       (<s> ^go <k>)
+   --> (write |p | <v> (crlf))}
+""",
+    # the blocker leaves in the batch that adds the ^x WMEs: the kernel adds a batch's
+    # WMEs before it removes any, so one's matches are made after two's (farmer: the
+    # never-undo of a new operator, while the ^failure it negates leaves)
+    "same-batch": """
+sp {init*a (state <s> ^operator.name init) --> (<s> ^stage 0 ^blocker yes)}
+sp {swap (state <s> ^operator.name next ^stage 1 ^blocker <b>) --> (<s> ^blocker <b> - ^x 1 2)}
+sp {one (state <s> ^superstate nil -^blocker ^x <v>) --> (write |p one | <v> (crlf))}
+sp {two (state <s> ^superstate nil ^x <v>) --> (write |p two | <v> (crlf))}
+""",
+    # (F1 ^on R) replaces (F1 ^on L) in one batch: the memory above pa's passenger ^on
+    # join never empties, so that join keeps its place before pb's (linked later, by
+    # ^flag) in the ^on alpha memory, though no link of it was on record (farmer: the
+    # proposal with the wolf is made before result*stays after the first crossing)
+    "replaced-token": """
+sp {init*a (state <s> ^operator.name init)
+   --> (<s> ^stage 0 ^item <f> <w> ^bank <l> <r>) (<f> ^name farmer ^on <l>)
+       (<w> ^name wolf ^on <l>)}
+sp {flag (state <s> ^operator.name next ^stage 0) --> (<s> ^flag yes)}
+sp {move (state <s> ^operator.name next ^stage 1 ^item <i> ^bank {<r> <> <l>}) (<i> ^on <l>)
+   --> (<i> ^on <l> - <r>)}
+sp {pa (state <s> ^superstate nil ^item <f>) (<f> ^name farmer ^on <b>)
+       (<s> ^item {<p> <> <f>}) (<p> ^on <b> ^name <n>)
+   --> (write |p a | <n> (crlf))}
+sp {pb (state <s> ^superstate nil ^flag yes ^item <i>) (<i> ^on <b> ^name <n>)
+   --> (write |p b | <n> (crlf))}
+""",
+}
+
+
+@pytest.mark.parametrize("case", sorted(UNBLOCKS))
+def test_unblocked_tokens_are_made_when_their_negation_unblocks(case: str, tmp_path) -> None:
+    text = UNBLOCK_BASE + UNBLOCKS[case]
+
+    def writes(trace: str) -> list[str]:
+        return re.findall(r"p (?:one |two |a |b )?\w+", trace)
+
+    ours = writes(_our_trace(text, 10, 1))
+    assert len(ours) >= 3
+    assert ours == writes(_kernel_trace(text, 10, tmp_path, 1))
+
+
+# p*eaten's farmer ^on join is unlinked while the wolf and the goat are on different
+# banks, and relinked when the wolf crosses (stage 1): the kernel puts it into the ^on
+# alpha memory's list just before its linked ancestor join there (the goat's ^on), which
+# was linked at init, before p*alone's (linked by ^flag, later), not at the tail: when
+# the farmer crosses, p*eaten's match is made first and p*alone fires first (farmer:
+# cross-alone fires before goat-eaten after the third crossing, seeds 2, 3, 5).
+RELINK_BEFORE_ANCESTOR = UNBLOCK_BASE + """
+sp {init*a (state <s> ^operator.name init)
+   --> (<s> ^stage 0 ^item <f> <w> <g> ^bank <l> <r>) (<f> ^name farmer ^on <l> ^when 2)
+       (<w> ^name wolf ^on <r> ^when 1) (<g> ^name goat ^on <l>)}
+sp {flag (state <s> ^operator.name next ^stage 0) --> (<s> ^flag yes)}
+sp {move (state <s> ^operator.name next ^stage <n> ^item <i> ^bank {<r> <> <l>})
+       (<i> ^when <n> ^on <l>)
+   --> (<i> ^on <l> - <r>)}
+sp {p*alone (state <s> ^superstate nil ^flag yes ^item <f>) (<f> ^name farmer ^on <b>)
+   --> (write |p alone | <b> (crlf))}
+sp {p*eaten (state <s> ^superstate nil ^item <g> <w>) (<g> ^name goat ^on <b>)
+       (<w> ^name wolf ^on <b>) (<s> ^item <f>) (<f> ^name farmer ^on {<> <b> <fb>})
+   --> (write |p eaten | <fb> (crlf))}
+"""
+
+
+def test_a_relinked_join_goes_before_its_linked_ancestor(tmp_path) -> None:
+    def writes(trace: str) -> list[str]:
+        return re.findall(r"p (?:alone|eaten) \w+", trace)
+
+    ours = writes(_our_trace(RELINK_BEFORE_ANCESTOR, 10, 1))
+    assert ours == ["p alone L2", "p alone R4", "p eaten R4"]
+    assert ours == writes(_kernel_trace(RELINK_BEFORE_ANCESTOR, 10, tmp_path, 1))
