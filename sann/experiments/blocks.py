@@ -113,9 +113,9 @@ class BlocksExperiment:
 
     @classmethod
     def quick(cls, seeds: int = 2) -> BlocksExperiment:
-        return cls(n_train=300, n_test=200, seeds=seeds, data_seeds=(0, 1),
+        return cls(n_train=150, n_test=120, seeds=seeds, data_seeds=(0, 1),
                    train=TrainConfig(epochs=15, batch_size=64, lr=0.02),
-                   curve_sizes=(30, 100), min_steps=150, resamples=500, tsne_points=200)
+                   curve_sizes=(30, 100), min_steps=100, resamples=500, tsne_points=150)
 
 
 # --------------------------------------------------------------------------- the predictors

@@ -28,7 +28,7 @@ def quick_results(tmp_path_factory):
 
 def test_quick_results_hold_the_five_baselines_and_the_learning_curves(quick_results):
     out, results = quick_results
-    assert results["sizes"] == [30, 100, 300]
+    assert results["sizes"] == [30, 100, QUICK.n_train]
     for kind in blocks.KINDS:
         for mode in blocks.MODES:
             cell = results["datasets"][kind][mode]
