@@ -34,9 +34,13 @@ $(COMPILED): $(STAMP) $(ENGINE) setup.py sann/soar/compiled.py
 
 engine: $(COMPILED)
 
+# Chapters are executed only when a file they read changed (sann.bookcache: the execution cache
+# and the doctrees stay in book/_build). A failed build forgets its doctrees, so that the next
+# build reads the failing chapter again instead of passing on the stored one.
 book: $(STAMP) $(COMPILED)
 	rm -rf book/_build/html
-	$(VENV)/bin/sphinx-build -W --keep-going -b html book book/_build/html
+	$(VENV)/bin/sphinx-build -W --keep-going -b html -d book/_build/doctrees book book/_build/html \
+	  || { rm -rf book/_build/doctrees; exit 1; }
 	@echo "The book is at $(abspath $(BOOK_HTML))"
 
 # Headless Chromium for the browser tests comes from Debian (never a downloaded browser).
@@ -45,6 +49,12 @@ book: $(STAMP) $(COMPILED)
 
 test: $(STAMP) $(COMPILED) /usr/bin/chromium
 	$(PY) -m pytest -n 2 --dist loadgroup --durations=10 tests
+
+# The built book on 127.0.0.1, where its Soar cells run (a page opened from disk runs none).
+.PHONY: serve
+serve: $(STAMP)
+	@test -f $(BOOK_HTML) || { echo "no built book: run make book first"; exit 1; }
+	$(PY) -m sann.serve book/_build/html --port $${PORT:-8000}
 
 lab: $(STAMP)
 	$(VENV)/bin/jupyter lab --allow-root --notebook-dir=book
@@ -57,5 +67,6 @@ bench: $(STAMP) $(COMPILED)
 	$(PY) benchmarks/blocks.py
 	$(PY) benchmarks/vision.py
 
+# The book's caches: executed chapters (book/_build/.jupyter_cache) and datasets (.sann-cache).
 clean:
 	rm -rf book/_build .sann-cache build build.log $(COMPILED) sann/soar/*.so

@@ -10,6 +10,7 @@ import importlib
 import importlib.util
 import os
 import shutil
+import sys
 from pathlib import Path
 
 from docutils import nodes
@@ -28,16 +29,27 @@ html_math_renderer = "mathml"
 exclude_patterns = ["_build", "**.ipynb_checkpoints", "README.md"]
 source_suffix = {".md": "myst-nb", ".ipynb": "myst-nb"}
 
+# --- the live book: every Soar block runs in the page (book/live_ext.py) -----------------------
+sys.path.insert(0, str(BOOK))
+extensions.append("live_ext")
+
 # --- MyST ---------------------------------------------------------------------------------------
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
 myst_heading_anchors = 3
 
-# --- execution ----------------------------------------------------------------------------------
-# "force" re-runs every chapter on every build, so a change in the package or in a rule file is
-# always seen. Authors iterating on prose may export SANN_BOOK_EXECUTION=cache (the cache lives
-# under _build and is keyed on the notebook's code only, hence not the default).
-nb_execution_mode = os.environ.get("SANN_BOOK_EXECUTION", "force")
+# --- execution ---------------------------------------------------------------------------------
+# sann.bookcache executes the chapters before Sphinx reads them (SANN_BOOK_JOBS at a time,
+# default 2) with a recorder of the project files each one reads; jupyter-cache keeps the
+# executed notebooks, and an entry whose recorded inputs (rule files, grammars, sann modules,
+# .sann-cache data, the installed packages) changed is executed again. SANN_BOOK_EXECUTION=force
+# re-executes every chapter with myst-nb instead.
+extensions.append("sann.bookcache")
+nb_execution_mode = os.environ.get("SANN_BOOK_EXECUTION", "cache")
 nb_execution_cache_path = str(BOOK / "_build" / ".jupyter_cache")
+sann_bookcache_roots = [str(BOOK.parent)]
+# Started first on a build that has no measured times yet (a fresh clone): the longest chapter,
+# so that the other slot executes the rest meanwhile. Later builds order by measured times.
+sann_bookcache_first = ["networks", "cups"]
 # Per cell: on a first build (no dataset cache) the networks chapter's experiment cell plans
 # some 12,600 scenes; on a loaded 2-core machine the chapter took 885 s, near the old 900.
 nb_execution_timeout = 1800

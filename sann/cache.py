@@ -10,11 +10,15 @@ most a ``*.tmp`` file, which is never read (and is swept by later writes once it
 entry that fails to load (truncated, corrupt, wrong format) counts as a miss and is rebuilt.
 Every entry carries its own key, checked on load.
 
+Concurrency: an entry being built is locked (``flock`` on a ``.<entry>.lock`` file beside it),
+so processes that miss the same entry at once build it once; the others wait and load it.
+
 Directory: ``$SANN_CACHE`` if set, else ``.sann-cache/`` at the repository root.
 """
 
 from __future__ import annotations
 
+import fcntl
 import hashlib
 import io
 import json
@@ -22,7 +26,8 @@ import os
 import tempfile
 import time
 import zipfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -41,6 +46,33 @@ def cache_dir() -> Path:
 def file_sha256(path: str | os.PathLike[str]) -> str:
     """Hex SHA-256 of a file's bytes (e.g. the rule file a dataset was planned with)."""
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def soar_code_sha256(path: str | os.PathLike[str]) -> str:
+    """Hex SHA-256 of a Soar file's text with its comments removed (a ``#`` outside ``|...|``
+    and ``"..."`` up to the end of its line: grammars/soar.lark ignores exactly these, and no
+    other token may hold a ``#``). Datasets are keyed on it, so that editing the comments of a
+    rule file, which cannot change a plan, does not plan every scene again."""
+    text = Path(path).read_text(encoding="utf-8")
+    code: list[str] = []
+    quote = ""
+    i = 0
+    while i < len(text):
+        c = text[i]
+        if quote:
+            code.append(text[i:i + 2] if c == "\\" else c)
+            i += 2 if c == "\\" else 1
+            quote = "" if c == quote else quote
+            continue
+        if c == "#":
+            end = text.find("\n", i)
+            i = len(text) if end < 0 else end
+            continue
+        if c in "|\"":
+            quote = c
+        code.append(c)
+        i += 1
+    return hashlib.sha256("".join(code).encode()).hexdigest()
 
 
 def make_key(description: dict) -> str:
@@ -99,14 +131,31 @@ def get_or_build(name: str, description: dict,
                  ) -> tuple[dict[str, np.ndarray], bool]:
     """Load the entry for ``description`` or build and store it. Returns (arrays, was_hit)."""
     key = make_key(description)
-    if use_cache:
-        hit = load(name, key, directory)
+    if not use_cache:
+        return build(), False
+    hit = load(name, key, directory)
+    if hit is not None:
+        return hit, True
+    with _building(entry_path(name, key, directory)):
+        hit = load(name, key, directory)  # built by another process while this one waited
         if hit is not None:
             return hit, True
-    arrays = build()
-    if use_cache:
+        arrays = build()
         save(name, key, arrays, directory)
     return arrays, False
+
+
+@contextmanager
+def _building(path: Path) -> Iterator[None]:
+    """Hold an exclusive lock on ``path``'s entry while it is built, so that two processes
+    asking for the same entry (two book chapters executed at once) build it once."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd = os.open(path.parent / f".{path.name}.lock", os.O_WRONLY | os.O_CREAT, 0o644)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)
 
 
 def _sweep_stale_tmp(directory: Path) -> None:

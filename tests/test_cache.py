@@ -89,3 +89,71 @@ def test_env_var_sets_directory(tmp_path: Path, monkeypatch: pytest.MonkeyPatch)
     assert cache.cache_dir() == tmp_path / "c"
     with pytest.raises(ValueError, match="file name"):
         cache.entry_path("a/b", "k")
+
+
+def test_soar_code_hash_ignores_comments_only(tmp_path: Path) -> None:
+    """A comment edit keeps the hash (datasets stay cached); any code edit changes it, and a
+    ``#`` inside a quoted symbol or string is code."""
+    rules = tmp_path / "r.soar"
+
+    def code_hash(text: str) -> str:
+        rules.write_text(text)
+        return cache.soar_code_sha256(rules)
+
+    base = code_hash("# header\nsp {a (state <s>) --> (<s> ^x |#1|)} # tail\n")
+    assert code_hash("# header, edited\nsp {a (state <s>) --> (<s> ^x |#1|)} # other\n") == base
+    assert code_hash("# header\nsp {a (state <s>) --> (<s> ^x |#2|)} # tail\n") != base
+    assert code_hash("# header\nsp {a (state <s>) --> (<s> ^y |#1|)} # tail\n") != base
+    assert code_hash('# h\nsp {a (state <s>) --> (write "#1")}\n') != code_hash(
+        '# h\nsp {a (state <s>) --> (write "#2")}\n')
+    assert code_hash("sp {a (state <s>) --> (<s> ^x |a\\|#b|)}\n") != code_hash(
+        "sp {a (state <s>) --> (<s> ^x |a\\|#c|)}\n")
+
+
+def test_a_comment_on_every_line_leaves_the_productions_and_the_hash(tmp_path: Path) -> None:
+    """What soar_code_sha256 relies on: our parser reads the shipped rules with a comment added
+    at the end of every line (outside quotes) as the same productions."""
+    from sann.soar.agent import Agent
+    from sann.soar.printer import format_production
+
+    def productions(path: Path) -> list[str]:
+        agent = Agent()
+        agent.source(str(path))
+        return [format_production(info.production) for info in agent._productions.values()]
+
+    root = Path(__file__).resolve().parents[1] / "rules"
+    for path in sorted(root.glob("*.soar")):
+        commented = tmp_path / path.name
+        commented.write_text("\n".join(
+            line if "|" in line or '"' in line or line.endswith("\\") else line + "# added"
+            for line in path.read_text().split("\n")))
+        assert productions(commented) == productions(path), path.name
+        assert cache.soar_code_sha256(commented) == cache.soar_code_sha256(path), path.name
+
+
+def _build_once_worker(directory: str, log: str) -> None:
+    def build() -> dict[str, np.ndarray]:
+        with open(log, "a") as fh:
+            fh.write("built\n")
+        import time
+
+        time.sleep(0.5)
+        return _arrays()
+
+    arrays, _ = cache.get_or_build("shared", {"n": 1}, build, directory=Path(directory))
+    assert arrays["x"].shape == (2, 3)
+
+
+def test_processes_missing_the_same_entry_build_it_once(tmp_path: Path) -> None:
+    import multiprocessing as mp
+
+    log = tmp_path / "builds.log"
+    ctx = mp.get_context("fork")
+    procs = [ctx.Process(target=_build_once_worker, args=(str(tmp_path), str(log)))
+             for _ in range(2)]
+    for p in procs:
+        p.start()
+    for p in procs:
+        p.join(30)
+    assert [p.exitcode for p in procs] == [0, 0]
+    assert log.read_text().split() == ["built"]

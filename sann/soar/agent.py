@@ -50,6 +50,7 @@ from .production import (
     duplicate_key,
     same_production,
 )
+from .results import find_results
 from .rete import KernelOrder, negation_matches, prefix_tokens
 from .rhs import FUNCTIONS, format_value, kernel_random
 from .trace import print_identifier, symbol_text, trace_preference, trace_wme
@@ -130,6 +131,9 @@ class Agent:
         self.max_gp = 20000  # most productions one gp may make (the kernel's default)
         self.multi_attributes: dict[str, int] = {}
         self.warnings = True
+        #: when the kernel would learn chunks (``chunk always|never|only|except``): this
+        #: engine does not learn, so it runs only with ``never``
+        self.learning = "never"
         self._gensym_counter = 0
         self.matcher = self._matcher_class()
         # the kernel Rete's node tree, for the order it makes matches in (_kernel_key)
@@ -357,6 +361,11 @@ class Agent:
         """Run until halt or interrupt, or until ``decisions`` more decisions were made."""
         if decisions is not None and decisions < 0:
             raise SoarRuntimeError(f"run: decision count must be >= 0, got {decisions}")
+        if self.learning != "never":
+            raise SoarRuntimeError(
+                f"run: learning is on ('chunk {self.learning}'), and this engine does not "
+                "learn chunks: turn it off with 'chunk never' (or 'learn --off') first"
+            )
         self._stop = False
         self._halt_note = ""
         target = None if decisions is None else self._decisions + self._owed(decisions)
@@ -494,6 +503,8 @@ class Agent:
         self._changed_context: list[Slot] = []
         # (instantiation, the justification of its results) made in this wave
         self._new_justifications: list[tuple[Instantiation, Instantiation]] = []
+        #: A new justification's preference -> the result it copies, while not asserted.
+        self._copied_from: dict[Preference, Preference] = {}
         self._refs: dict[Identifier, int] = {}
         self._in_wm_phase = False
         self._phase_timetag = 0
@@ -528,7 +539,6 @@ class Agent:
         # (justification, conjunctive negation, bindings) whose watched WME came this phase
         self._ncc_checks: list[tuple] = []
         self._justification_index: dict[tuple, Instantiation] = {}
-        self._pending_gds: list[tuple[Goal, list[WME]]] = []
         self._neg_keys: dict[Instantiation, list[tuple]] = {}
         self._dead_ids: list[Identifier] = []
         self._sources: weakref.WeakKeyDictionary[WME, Instantiation] = weakref.WeakKeyDictionary()
@@ -1445,6 +1455,8 @@ class Agent:
         if inst.goal.level > 1 and not any(p.live for p in inst.prefs):
             inst.goal.insts.pop(inst, None)
         if inst.is_justification:
+            if inst.source is not None and not any(p.live for p in inst.prefs):
+                inst.source.justified.pop(inst, None)
             if self._justification_index.get(inst.match) is inst:  # type: ignore[arg-type]
                 del self._justification_index[inst.match]  # type: ignore[arg-type]
             for key in self._neg_keys.pop(inst, ()):
@@ -1496,16 +1508,31 @@ class Agent:
                     if tracing:
                         self._emit_line(trace_preference("+", pref)[:-1]
                                         + " ALREADY SUPPORTED ON TOP LEVEL.  IGNORING.\n")
+                    self._drop_copied(pref)
                     continue
                 if tracing:
                     self._emit_line(trace_preference("+", pref))
                 self._add_preference(pref)
+        self._copied_from.clear()
+
+    def _drop_copied(self, pref: Preference) -> None:
+        """An ignored justification preference takes the results it copies with it: the
+        kernel's clones go together (measured in soar_sml: when '+ (S1 ^y 1 +  :O )
+        (justify1) ALREADY SUPPORTED ON TOP LEVEL.  IGNORING.', the substate rule's own
+        (S1 ^y 1) is neither asserted nor removed with the substate)."""
+        original = self._copied_from.get(pref)
+        while original is not None:
+            original.inst = None  # type: ignore[assignment]  # never asserted
+            original = self._copied_from.get(original)
 
     def _already_supported(self, pref: Preference) -> bool:
         """Whether the slot already holds the same o-supported preference: the kernel then
         ignores a new one made on the top level (measured in soar_sml: '+ (S1 ^note x +
         :O ) (a) ALREADY SUPPORTED ON TOP LEVEL.  IGNORING.', and a later o-reject of x
-        removes only the older preference)."""
+        removes only the older preference). Only a top-level instantiation's preference
+        counts: a substate's own stays beside its justification's copy, which outlives it
+        (measured: ``(S1 ^x 1 :O) [level 2]`` does not make ``justify1``'s ignored, a
+        top-level rule's or an older justification's does)."""
         slots = self._slots.get(pref.id)
         attr = pref.attr
         slot = slots.get(attr if type(attr) is not float else (float, attr)) if slots else None
@@ -1515,7 +1542,8 @@ class Agent:
         value, referent = pref.value, pref.referent
         for old in bucket:  # 1 and 1.0 are different symbols: the types must agree too
             if (old.o_supported and old.value == value and type(old.value) is type(value)
-                    and old.referent == referent and type(old.referent) is type(referent)):
+                    and old.referent == referent and type(old.referent) is type(referent)
+                    and old.inst is not None and old.inst.goal.level == 1):
                 return True
         return False
 
@@ -1697,8 +1725,6 @@ class Agent:
                 self.matcher.mark_removals()
             for wme in removes:
                 self._remove_wme(wme)
-            if self._pending_gds:
-                self._extend_gds()
             if self._unlinked:
                 traced = len(buffer)
                 self._collect_unlinked()
@@ -2106,6 +2132,7 @@ class Agent:
                         self._emit_line(trace_preference("-", pref))
                     self._remove_preference(pref)
         goal.insts.clear()
+        self._drop_local_results(goal)
         traced = len(self._traced_removes)
         for wme in list(goal.items.values()) + list(goal.counts.values()) + goal.arch_wmes:
             self._remove_arch(wme)
@@ -2132,6 +2159,22 @@ class Agent:
         self._dead_ids.append(goal.id)
         if not self._in_wm_phase:
             self._working_memory_phase(diffs_last=True)
+
+    def _drop_local_results(self, goal: Goal) -> None:
+        """A result may link the substate's own identifiers (the state, its operators):
+        the justification's preferences on them go with the substate, the rest stay
+        (measured in soar_sml: ``(A1 ^local-copy S2)`` made a result of ``(S2 ^operator
+        O2 +)`` and ``(O2 ^name answer)``; removing S2 traces '- (S2 ^operator O2 +  :O )
+        (justify1)' and '- (O2 ^name answer +  :O ) (justify1)' after its own
+        instantiations' preferences)."""
+        level = goal.level
+        for just in goal.justified:
+            for pref in reversed(just.prefs):
+                if pref.live and self._level_of(pref.id) >= level:
+                    if self.trace_level >= 5:
+                        self._emit_line(trace_preference("-", pref))
+                    self._remove_preference(pref)
+        goal.justified.clear()
 
     def _trace_goal_removal(self, goal: Goal, start: int) -> None:
         """Put the removed goal's architecture WMEs (traced from ``start`` on) in the
@@ -2250,64 +2293,38 @@ class Agent:
             self._gds_requests.append((goal, inst))
 
     def _grow_gds(self) -> None:
-        """Extend the goal dependency sets of the wave's o-supported local preferences,
-        once the wave's preferences are in their slots: the kernel elaborates a GDS through
-        the local i-supported WMEs' current acceptable preferences, so a WME that an
-        o-reject of the wave took away leads nowhere (measured in soar_sml: a counter made
-        by an elaboration on a superstate flag and modified by ``^steps <n> - (+ <n> 1)``
-        does not make the flag part of the GDS)."""
+        """Make the goal dependency set of a substate whose first o-supported local
+        preferences this wave made, from the instantiation that made them; once made, the
+        kernel does not extend it (measured in soar_sml: with the set made by an earlier
+        operator, or by another rule of the same wave, a superstate WME that only a later
+        o-supported instantiation tested leaves without removing the substate; tested by
+        the rule that made the set, it removes it, whoever made the WME). The set goes
+        through the local i-supported WMEs' current acceptable preferences, so a WME that
+        an o-reject of the wave took away leads nowhere (measured: a counter made by an
+        elaboration on a superstate flag and modified by ``^steps <n> - (+ <n> 1)`` does
+        not make the flag part of the GDS)."""
         requests, self._gds_requests = self._gds_requests, []
         for goal, inst in requests:
-            if not goal.alive:
+            if not goal.alive or goal.gds_made:
                 continue
-            # The kernel extends the GDS when the o-supported WME enters working memory,
-            # so superstate WMEs that leave in that same phase are not part of it.
-            wmes = self._backtrace(inst, goal.level, through_o_support=False)
-            if goal.gds:
-                self._pending_gds.append((goal, wmes))
-            else:  # a new GDS takes these WMEs at once (measured on the kernel)
-                for wme in wmes:
-                    goal.gds.add(wme)
-                    self._gds_index.setdefault(wme, {})[goal] = None
-
-    def _extend_gds(self) -> None:
-        pending, self._pending_gds = self._pending_gds, []
-        wm = self._wm
-        for goal, wmes in pending:
-            if not goal.alive:
-                continue
-            for wme in wmes:
-                if wm.get(wme.timetag) is wme and wme not in goal.gds:
-                    goal.gds.add(wme)
-                    self._gds_index.setdefault(wme, {})[goal] = None
+            goal.gds_made = True
+            for wme in self._backtrace(inst, goal.level, through_o_support=False):
+                goal.gds.add(wme)
+                self._gds_index.setdefault(wme, {})[goal] = None
 
     def _find_results(self, inst: Instantiation, level: int) -> list[Preference]:
-        results: list[Preference] = []
-        marked: set[int] = set()
-        frontier: list[Identifier] = []
-        for pref in inst.prefs:
-            if self._level_of(pref.id) < level:
-                results.append(pref)
-                marked.add(id(pref))
-                frontier.extend(self._ids_in(pref, self._level_of(pref.id)))
-        while frontier:
-            ident = frontier.pop()
-            for pref in inst.prefs:
-                if id(pref) not in marked and pref.id is ident:
-                    results.append(pref)
-                    marked.add(id(pref))
-                    frontier.extend(self._ids_in(pref, self._level_of(pref.id)))
-        return results
+        return find_results(inst, level, self._level_of, self._slots)
 
-    def _ids_in(self, pref: Preference, level: int) -> list[Identifier]:
-        """Identifiers a result links to; they are promoted to the result's level."""
-        out = []
-        for sym in (pref.value, pref.referent):
-            if isinstance(sym, Identifier) and sym.level is None:
-                if self._level_of(sym) > level:
+    def _promote(self, results: list[Preference]) -> None:
+        """Identifiers a result links to move up to the result's level (parents first:
+        ``results`` is the last found first), once the results have been backtraced: the
+        kernel backtraces a result made from local structure through that structure."""
+        for pref in reversed(results):
+            level = self._level_of(pref.id)
+            for sym in (pref.value, pref.referent):
+                if (isinstance(sym, Identifier) and sym.level is None
+                        and self._level_of(sym) > level):
                     self._level[sym] = level
-                    out.append(sym)
-        return out
 
     def _justify(self, inst: Instantiation, results: list[Preference]) -> None:
         """Stand in for the substate's reasoning with justifications whose conditions are
@@ -2317,17 +2334,19 @@ class Agent:
         (measured in soar_sml: a result two levels up is asserted by '[level 2] (justify1)'
         and by 'justify3', which stays when the middle state goes)."""
         visited: list[Instantiation] = []
-        grounds = tuple(
-            self._backtrace(inst, inst.goal.level, through_o_support=True, visited=visited)
-        )
+        grounds = tuple(self._backtrace(
+            inst, inst.goal.level, through_o_support=True, visited=visited,
+            also=[pref.inst for pref in results if pref.inst is not inst],
+        ))
+        self._promote(results)
         if not grounds:
             self._ignore_unconditional_justification(inst)
             return
         home = inst.goal.superstate
         assert home is not None  # results come from substates
         just = self._make_justification(inst, results, grounds, home, inst)
-        self._justification_matches(inst.goal, min(self._level_of(p.id) for p in results))
-        self._watch_negations(just, visited, inst.goal.level)
+        if self._watch_negations(just, visited, inst.goal.level):
+            self._justification_matches(inst.goal, min(self._level_of(p.id) for p in results))
         while home.superstate is not None:
             higher = [p for p in just.prefs if self._level_of(p.id) < home.level]
             if not higher:
@@ -2367,7 +2386,8 @@ class Agent:
         )
         just.grounds = grounds
         just.source = inst.goal
-        if operators and _proposes_on_a_state(results):
+        inst.goal.justified[just] = None
+        if operators and _proposes_on_a_state(results, match_goal_id):
             operators = []  # a proposal is i-supported, as a rule's (see is_o_supported)
         on_operator = [any(pref.id is op for op in operators) for pref in results]
         mixed = bool(operators) and any(on_operator) and not all(on_operator)
@@ -2377,18 +2397,14 @@ class Agent:
             copy = Preference(pref.type, pref.id, pref.attr, pref.value, pref.referent, just)
             copy.o_supported = bool(operators) and not elaborates and not mixed
             just.prefs.append(copy)
-            if copy.o_supported and pref.type == REJECT:
+            if not pref.live:
+                self._copied_from[copy] = pref
+            if copy.o_supported and pref.type == REJECT and not pref.live:
                 # The copy is an o-reject, which takes the rule's own reject with it
                 # (measured in soar_sml: '+ (S1 ^x 5 -) [level 2]' is not asserted then).
                 pref.inst = None  # type: ignore[assignment]
         self._new_justifications.append((fired, just))
         self._replace_duplicate_justification(just)
-        # A WME it tested leaving, or one that a negated condition of it tested appearing,
-        # retracts it even when its results are all o-supported: no preference changes,
-        # but it is activity at its level, like the kernel's (an elaboration cycle that
-        # fires nothing; measured).
-        for wme in grounds:
-            self._dependents.setdefault(wme, []).append(just)
         if home.level > 1:
             home.insts[just] = None
             level = home.level
@@ -2412,7 +2428,10 @@ class Agent:
 
     def _replace_duplicate_justification(self, just: Instantiation) -> None:
         """A justification identical to a live one (same conditions, same results)
-        replaces it: the kernel retracts the old one in the next cycle (measured)."""
+        replaces it: the kernel retracts the old one in the next cycle (measured). One
+        made in the same wave is not retracted: no cycle goes to its level for it
+        (measured in soar_sml: justify5 and justify7 of two elaborations firing together
+        for the same (S1 ^seen O4) leave level 1 quiet)."""
         signature = (
             frozenset(w.timetag for w in just.grounds),
             frozenset(
@@ -2421,7 +2440,8 @@ class Agent:
             ),
         )
         old = self._justification_index.get(signature)
-        if old is not None and not old.retracted:
+        if old is not None and not old.retracted and all(
+                made is not old for _, made in self._new_justifications):
             self._schedule_retraction(old)
         self._justification_index[signature] = just
         just.match = signature
@@ -2440,10 +2460,54 @@ class Agent:
 
     def _watch_negations(
         self, just: Instantiation, visited: list[Instantiation], level: int
-    ) -> None:
-        """A justification also depends on the absence of what its instantiations' negated
-        conditions tested in superstates: watch for such a WME to appear."""
+    ) -> bool:
+        """Watch what the new justification matches: a WME it tested leaving, or one that
+        a negated condition of its instantiations tested in superstates appearing,
+        retracts it even when its results are all o-supported: no preference changes,
+        but it is activity at its level, like the kernel's (an elaboration cycle that
+        fires nothing; measured).
+
+        A justification whose conditions do not hold when it is made (backtracing
+        through local o-supported WMEs reaches tests of the past: a negation of a WME
+        that has since come, a WME since gone) never matches, so nothing retracts it:
+        watch nothing then and return False (measured in soar_sml: justify3 with
+        ``(state S1 -^problem <p*1>)`` when (S1 ^problem P1) stands and
+        ``(C5 -^digit1 <d*1>)`` for its own result (C5 ^digit1 5) makes no cycle at S1's
+        level, while justify1 with only the first makes one when (S1 ^problem P1) comes).
+        """
+        entries = list(self._negations_of(visited, level))
+        wm = self._wm
+        if any(wm.get(wme.timetag) is not wme for wme in just.grounds) or any(
+            self._negation_holds_not(element, bindings) for _, element, _, bindings in entries
+        ):
+            return False
+        for wme in just.grounds:
+            self._dependents.setdefault(wme, []).append(just)
         keys = []
+        for key, _, test, bindings in entries:
+            self._neg_watch.setdefault(key, []).append((just, test, bindings))
+            keys.append(key)
+        self._neg_keys[just] = keys
+        return True
+
+    def _negation_holds_not(self, element: object, bindings: dict[str, Symbol]) -> bool:
+        """Whether a WME now matches a negated condition or conjunctive negation."""
+        if isinstance(element, ConjunctiveNegation):
+            wmes: dict[WME, None] = {}
+            for cond in element.conditions:
+                if isinstance(cond, Condition):
+                    wmes.update(dict.fromkeys(self._wmes_of(cond)))
+                else:
+                    wmes.update(dict.fromkeys(self._wm.values()))
+            return negation_matches(element, list(wmes), bindings)
+        assert isinstance(element, Condition)
+        return negation_matches(element, self._wmes_of(element), bindings)
+
+    def _negations_of(
+        self, visited: list[Instantiation], level: int
+    ) -> Iterator[tuple[tuple, object, object, dict[str, Symbol]]]:
+        """``(watch key, element, watched test, bindings)`` of every negated condition
+        on a superstate identifier in the instantiations behind a justification."""
         for source in visited:
             match = source.match
             if match is None:
@@ -2457,18 +2521,13 @@ class Agent:
                     for cond in element.conditions:
                         key = self._watch_key(cond, bindings, level)
                         if key is not None:
-                            self._neg_watch.setdefault(key, []).append(
-                                (just, element, bindings))
-                            keys.append(key)
+                            yield key, element, element, bindings
                     continue
                 if not isinstance(element, Condition) or not element.negated:
                     continue
                 key = self._watch_key(element, bindings, level)
                 if key is not None:
-                    self._neg_watch.setdefault(key, []).append(
-                        (just, element.value_test, bindings))
-                    keys.append(key)
-        self._neg_keys[just] = keys
+                    yield key, element, element.value_test, bindings
 
     def _watch_key(self, cond: object, bindings: dict[str, Symbol],
                    level: int) -> tuple | None:
@@ -2516,14 +2575,21 @@ class Agent:
         level: int,
         through_o_support: bool,
         visited: list[Instantiation] | None = None,
+        also: Iterable[Instantiation | None] = (),
     ) -> list[WME]:
         """Superstate WMEs (identifier above ``level``) that ``inst`` depends on, found by
-        walking back through the instantiations that made its local WMEs."""
+        walking back through the instantiations that made its local WMEs. ``also``: the
+        instantiations of its other results (made earlier, linked to the superstate by
+        ``inst``), which the justification depends on too."""
         grounds: dict[int, WME] = {}
+        starts = [inst]
+        for other in also:
+            if other is not None and all(other is not start for start in starts):
+                starts.append(other)
         if visited is not None:
-            visited.append(inst)
-        seen: set[int] = {id(inst)}
-        stack = [inst]
+            visited.extend(starts)
+        seen: set[int] = {id(start) for start in starts}
+        stack = starts[::-1]
         while stack:
             current = stack.pop()
             for wme in current.wmes:
@@ -2823,13 +2889,15 @@ def _token_order(wmes: tuple, place: tuple, starts: list[int]) -> tuple:
     return tuple(order)
 
 
-def _proposes_on_a_state(prefs: list[Preference]) -> bool:
-    """Whether the preferences propose an operator on a state: the kernel gives a
-    justification that does i-support, as it does a rule's match (measured in soar_sml:
-    a substate rule testing its selected operator that proposes an operator on the
-    superstate makes '+ (S1 ^operator O3 +) (justify1)', without ':O')."""
+def _proposes_on_a_state(prefs: list[Preference], goal: Identifier) -> bool:
+    """Whether the preferences propose an operator on the justification's match goal:
+    the kernel gives a justification that does i-support, as it does a rule's match
+    (measured in soar_sml: a substate rule testing its selected operator that proposes an
+    operator on the superstate makes '+ (S1 ^operator O3 +) (justify1)', without ':O';
+    a result that links the substate itself, with its proposal, keeps
+    '+ (S2 ^operator O2 +  :O ) (justify1)')."""
     return any(
-        pref.type == ACCEPTABLE and pref.attr == "operator" and pref.id.level is not None
+        pref.type == ACCEPTABLE and pref.attr == "operator" and pref.id is goal
         for pref in prefs
     )
 

@@ -229,19 +229,80 @@ def _decide(agent: Agent, args: tuple[str, ...], base: Path) -> None:
         raise SoarRuntimeError(f"unsupported sub-command {sub}")
 
 
-_LEARN_OFF = ("--off", "-d", "--disable", "off", "never", "--never")
-_LEARN_ON = ("--on", "-e", "--enable", "on", "always", "--always", "only", "except",
-             "--only", "--except")  # fmt: skip
+#: ``chunk <mode>``: when the kernel would learn (``on`` means ``only``, ``off`` ``never``).
+_CHUNK_MODES = {"always": "always", "never": "never", "only": "only", "except": "except",
+                "on": "only", "off": "never"}  # fmt: skip
+_ON_OFF = ("on", "off")
+#: ``chunk <setting> [<value>]``: the kernel's settings (``chunk ?``) and their values
+#: (None: an integer).
+_CHUNK_SETTINGS: dict[str, tuple[str, ...] | None] = {
+    "bottom-only": _ON_OFF, "naming-style": ("numbered", "rule"), "max-chunks": None,
+    "max-dupes": None, "interrupt": _ON_OFF, "explain-interrupt": _ON_OFF,
+    "warning-interrupt": _ON_OFF, "automatically-create-singletons": _ON_OFF,
+    "add-ltm-links": _ON_OFF, "add-osk": _ON_OFF, "allow-local-negations": _ON_OFF,
+    "allow-opaque": _ON_OFF,
+}  # fmt: skip
+_CHUNK_QUERIES = ("?", "help", "stats", "singleton")
+_CHUNK_INVALID = "Invalid chunking command.  Use 'chunk ?' to see a list of valid settings."
+_CHUNK_BAD_VALUE = (
+    "Invalid argument for chunking command. Use 'chunk ?' to see a list of valid settings."
+)
+
+
+def _chunk(agent: Agent, args: tuple[str, ...], base: Path) -> None:
+    """``chunk``, as the 9.6 kernel reads it (measured): options (``-x``) are ignored, the
+    first word is a mode, a setting with an optional value, or a query; words after the
+    mode are ignored. The mode is recorded (`Agent.learning`); running with any mode but
+    ``never`` is refused, as this engine does not learn."""
+    words = [word for word in args if not word.startswith("-")]
+    if not words:
+        return
+    first, rest = words[0], words[1:]
+    if first in _CHUNK_MODES:
+        agent.learning = _CHUNK_MODES[first]
+    elif first in _CHUNK_SETTINGS:
+        if rest and not _valid_chunk_value(_CHUNK_SETTINGS[first], rest[0]):
+            raise SoarRuntimeError(_CHUNK_BAD_VALUE)
+    elif first not in _CHUNK_QUERIES:
+        raise SoarRuntimeError(_CHUNK_INVALID)
+
+
+def _valid_chunk_value(values: tuple[str, ...] | None, word: str) -> bool:
+    if values is None:
+        return word.isdigit()
+    return word.lower() in values
+
+
+#: ``learn``'s flags (the kernel's "Syntax: learn [-abdeElonNpP]") and long options.
+_LEARN_FLAGS = "abdeElonNpP"
+_LEARN_LONG = {"on": "e", "enable": "e", "off": "d", "disable": "d", "only": "o",
+               "except": "E", "all-levels": "a", "bottom-up": "b", "list": "l",
+               "local-negations": "n"}  # fmt: skip
 
 
 def _learn(agent: Agent, args: tuple[str, ...], base: Path) -> None:
-    for item in args:
-        if item in _LEARN_ON:
-            raise SoarRuntimeError(
-                "learning (chunking) is not supported by this engine; only 'off' is allowed"
-            )
-        if item not in _LEARN_OFF and not item.startswith("--") and item not in ("-l",):
-            raise SoarRuntimeError(f"unknown option {item}")
+    """``learn``, the kernel's deprecated form of ``chunk`` (measured in 9.6): only flags,
+    any other word is refused; ``-e`` sets always, ``-d`` never, ``-o`` only, applied in
+    the order o, e, d whatever the order written (``-de`` and ``-ed`` both end in never);
+    ``-E`` (except) is refused by the kernel itself."""
+    flags: set[str] = set()
+    for word in args:
+        if word.startswith("--"):
+            if word[2:] not in _LEARN_LONG:
+                raise SoarRuntimeError(f"No such option: {word[2:]}")
+            flags.add(_LEARN_LONG[word[2:]])
+        elif word.startswith("-") and len(word) > 1:
+            for flag in word[1:]:
+                if flag not in _LEARN_FLAGS:
+                    raise SoarRuntimeError(f"No such option: {flag}")
+                flags.add(flag)
+        else:
+            raise SoarRuntimeError(f"Syntax: learn [-{_LEARN_FLAGS}]")
+    if "E" in flags:
+        raise SoarRuntimeError(_CHUNK_BAD_VALUE)
+    for flag, mode in (("o", "only"), ("e", "always"), ("d", "never")):
+        if flag in flags:
+            agent.learning = mode
 
 
 def _echo(agent: Agent, args: tuple[str, ...], base: Path) -> None:
@@ -635,7 +696,7 @@ HANDLERS: dict[str, Handler] = {
     "numeric-indifferent-mode": _numeric_indifferent_mode,
     "decide": _decide,
     "learn": _learn,
-    "chunk": _learn,
+    "chunk": _chunk,
     "echo": _echo,
     "output": _output,
     "excise": _excise,

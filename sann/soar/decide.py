@@ -217,7 +217,7 @@ def choose(slot: Slot, candidates: list[Symbol], exploration: Exploration) -> Sy
     if policy == "last":
         return candidates[-1]
     if policy == "random":
-        return candidates[rng.randrange(len(candidates))]
+        return candidates[_kernel_int(rng, len(candidates) - 1)]
     values = numeric_values(slot, candidates, exploration.numeric_mode)
     if policy == "softmax":
         return _softmax(candidates, values, rng)
@@ -226,12 +226,30 @@ def choose(slot: Slot, candidates: list[Symbol], exploration: Exploration) -> Sy
     return _epsilon_greedy(candidates, values, exploration.epsilon, rng)
 
 
+def _kernel_int(rng: random.Random, limit: int) -> int:
+    """The kernel's ``SoarRandInt(limit)`` (MTRand's ``randInt``), an integer in [0, limit]:
+    32-bit draws masked to limit's bit length until one is at most limit. Python's
+    ``randrange`` takes the high bits instead, so it would choose other candidates."""
+    mask = limit
+    for shift in (1, 2, 4, 8, 16):
+        mask |= mask >> shift
+    while True:
+        draw = rng.getrandbits(32) & mask
+        if draw <= limit:
+            return draw
+
+
+def _kernel_real(rng: random.Random) -> float:
+    """The kernel's ``SoarRand()`` (MTRand's ``rand``): one 32-bit draw over 2**32 - 1."""
+    return rng.getrandbits(32) * (1.0 / 4294967295.0)
+
+
 def _softmax(candidates: list[Symbol], values: list[float], rng: random.Random) -> Symbol:
     """The kernel's 'softmax': proportional to the positive numeric values, else uniform."""
     total = sum(v for v in values if v > 0)
     if total <= 0:
-        return candidates[rng.randrange(len(candidates))]
-    target = rng.random() * total
+        return candidates[_kernel_int(rng, len(candidates) - 1)]
+    target = _kernel_real(rng) * total
     running = 0.0
     for cand, value in zip(candidates, values, strict=True):
         if value > 0:
@@ -246,7 +264,7 @@ def _boltzmann(
 ) -> Symbol:
     top = max(values)
     weights = [math.exp((v - top) / temperature) for v in values]
-    target = rng.random() * sum(weights)
+    target = _kernel_real(rng) * sum(weights)
     running = 0.0
     for cand, weight in zip(candidates, weights, strict=True):
         running += weight
@@ -258,8 +276,8 @@ def _boltzmann(
 def _epsilon_greedy(
     candidates: list[Symbol], values: list[float], epsilon: float, rng: random.Random
 ) -> Symbol:
-    if rng.random() < epsilon:
-        return candidates[rng.randrange(len(candidates))]
+    if _kernel_real(rng) < epsilon:
+        return candidates[_kernel_int(rng, len(candidates) - 1)]
     top = max(values)
     best = [c for c, v in zip(candidates, values, strict=True) if v == top]
-    return best[rng.randrange(len(best))] if len(best) > 1 else best[0]
+    return best[_kernel_int(rng, len(best) - 1)] if len(best) > 1 else best[0]

@@ -36,6 +36,8 @@ class Goal:
         "retractions",
         "insts",
         "gds",
+        "gds_made",
+        "justified",
         "alive",
     )
 
@@ -61,6 +63,10 @@ class Goal:
         self.insts: dict[Instantiation, None] = {}
         #: Goal dependency set: superstate WMEs its o-supported WMEs depend on.
         self.gds: set[WME] = set()
+        #: Whether the GDS was made (it is made once: by the first o-supported firing).
+        self.gds_made = False
+        #: The justifications of this state's results, oldest first.
+        self.justified: dict[Instantiation, None] = {}
         self.alive = True
 
     def has_i_activity(self) -> bool:

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 
 from .codegen import define
 from .errors import SoarError, SoarRuntimeError
-from .memory import WME, Identifier, Symbol
+from .memory import WME, Identifier, Symbol, rhs_id_hint
 from .preferences import NATIVE, Preference, preference_type
 from .production import CallAction, Const, FuncCall, MakeAction, Production, RhsValue, Var
 from .rhs import FUNCTIONS, kernel_shown
@@ -175,11 +175,15 @@ def _make_preference(
     ident = _value(agent, action.id, bindings, inst)
     if type(ident) is not Identifier:
         raise not_an_identifier(action, inst.match.bindings, ident)  # type: ignore[attr-defined]
-    attr = _value(agent, action.attr, bindings, inst)
-    value = _value(agent, action.value, bindings, inst)
+    # A new identifier in the attribute, value or referent starts at the level of the
+    # identifier it augments, as in the kernel (``execute_action``): made on a superstate,
+    # it is a result at once, and so is all of its structure made by the same firing.
+    level = agent._level_of(ident)  # type: ignore[attr-defined]
+    attr = _value(agent, action.attr, bindings, inst, level)
+    value = _value(agent, action.value, bindings, inst, level)
     referent = None
     if action.referent is not None:
-        referent = _value(agent, action.referent, bindings, inst)
+        referent = _value(agent, action.referent, bindings, inst, level)
     ptype = action.preference
     if referent is not None:
         ptype = preference_type(ptype, referent)
@@ -187,19 +191,23 @@ def _make_preference(
 
 
 def _value(
-    agent: object, value: RhsValue, bindings: dict[str, Symbol], inst: Instantiation
+    agent: object, value: RhsValue, bindings: dict[str, Symbol], inst: Instantiation,
+    level: int | None = None,
 ) -> Symbol:
+    """The symbol a right-hand-side value stands for; an unbound variable makes a new
+    identifier at ``level`` (default: the instantiation's goal's)."""
     kind = type(value)
     if kind is Var:
         bound = bindings.get(value.name)  # type: ignore[union-attr]
         if bound is None:  # an unbound variable names a new identifier
-            bound = agent._new_id(value.name, inst.goal.level)  # type: ignore[attr-defined, union-attr]
+            at = inst.goal.level if level is None else level
+            bound = agent._new_id(rhs_id_hint(value.name), at)  # type: ignore[attr-defined, union-attr]
             bindings[value.name] = bound  # type: ignore[union-attr]
         return bound
     if kind is Const:
         return value.value  # type: ignore[union-attr]
     if kind is FuncCall:
-        result = _call(agent, value, bindings, inst)  # type: ignore[arg-type]
+        result = _call(agent, value, bindings, inst, level)  # type: ignore[arg-type]
         if result is None:
             raise SoarRuntimeError(f"({value.name}) returns no value")  # type: ignore[union-attr]
         return result
@@ -207,7 +215,8 @@ def _value(
 
 
 def _call(
-    agent: object, call: FuncCall, bindings: dict[str, Symbol], inst: Instantiation
+    agent: object, call: FuncCall, bindings: dict[str, Symbol], inst: Instantiation,
+    level: int | None = None,
 ) -> Symbol | None:
     function = FUNCTIONS.get(call.name)
     if function is None:
@@ -216,7 +225,7 @@ def _call(
     failed = False
     for arg in call.args:  # a loop is no slower than a list comprehension in CPython 3.11
         try:
-            args.append(_value(agent, arg, bindings, inst))
+            args.append(_value(agent, arg, bindings, inst, level))
         except (Abandoned, SoarError) as error:
             _report(agent, inst, error)
             failed = True
@@ -252,6 +261,8 @@ class _RhsCompiler:
     def __init__(self, name: str, bound: Container[str]) -> None:
         self.name = name
         self.bound = bound
+        #: The level a new identifier gets where it is made (an expression of the program).
+        self.level = "level"
         self.namespace: dict[str, object] = {
             "Preference": Preference,
             "NEW": object.__new__,
@@ -300,6 +311,9 @@ class _RhsCompiler:
             f"{ind}    raise not_an_identifier({self._const(action)},"
             f" {self._const(self.bound)}, {ident})"
         )
+        # new identifiers after the first start at the level of the augmented identifier
+        # (see _make_preference)
+        self.level = f"agent._level_of({ident})"
         attr = self._value(action.attr, out, ind)
         value = self._value(action.value, out, ind)
         ptype = self._const(action.preference)
@@ -307,6 +321,7 @@ class _RhsCompiler:
         if action.referent is not None:
             referent = self._value(action.referent, out, ind)
             ptype = f"preference_type({ptype}, {referent})"
+        self.level = "level"
         if NATIVE:  # mypyc's native Preference: its constructor is C, object.__new__ refused
             out += [
                 f"{ind}p = Preference({ptype}, {ident}, {attr}, {value}, {referent}, inst)",
@@ -333,7 +348,8 @@ class _RhsCompiler:
                 local = self.locals[node.name] = f"v{len(self.locals)}"  # type: ignore[union-attr]
             if node.name not in self.bound:  # type: ignore[union-attr]
                 out.append(f"{ind}if {local} is None:")
-                out.append(f"{ind}    {local} = new_id({self._const(node.name)}, level)")  # type: ignore[union-attr]
+                hint = self._const(rhs_id_hint(node.name))  # type: ignore[union-attr]
+                out.append(f"{ind}    {local} = new_id({hint}, {self.level})")
             return local
         if kind is Const:
             return self._const(node.value)  # type: ignore[union-attr]

@@ -44,6 +44,13 @@ class Identifier:
 Symbol = Identifier | str | int | float
 
 
+def rhs_id_hint(variable: str) -> str:
+    """The naming hint of an identifier that an unbound RHS variable makes: the variable
+    itself, except that the kernel keeps the letter S for states and names an identifier
+    made by ``<s...>`` with I (measured in soar_sml: ``(<s> ^x <small>)`` makes I4)."""
+    return "I" if variable[:1] in ("s", "S") else variable
+
+
 class IdentifierFactory:
     """Hands out identifiers named like Soar: the first letter of the attribute that
     created them (upper-cased, ``I`` for non-letters) and the next number for that letter."""

@@ -463,10 +463,13 @@ def _goal_of(ordered: list[KCond], ident: str) -> str | None:
 
 
 def format_kcond(kcond: KCond) -> str:
-    """``(state <s> ^a { > 3 <a*1> })``, ``(<s> -^b c)``, ``(<s> ^operator <o> +)``."""
+    """``(state <s> ^a { > 3 <a*1> })``, ``(<s> -^b c)``, ``(<s> ^operator <o> +)``, and
+    a conjunctive negation (nested in another one: ``-(<x> -^d.e f)``) as ``-{ ... }``."""
     def text(parts: list[str]) -> str:
         return parts[0] if len(parts) == 1 else "{ " + " ".join(parts) + " }"
 
+    if kcond.is_ncc:
+        return "-{" + " ".join(format_kcond(inner) for inner in kcond.inner) + "}"
     ident, attr, value = (text(f) for f in kcond.fields)
     head = f"{kcond.goal} " if kcond.goal else ""
     sign = "-" if kcond.negated else ""

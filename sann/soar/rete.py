@@ -54,7 +54,10 @@ from sann.soar.production import (
     Var,
 )
 
-__all__ = ["BruteForceMatcher", "Match", "Rete", "check_production", "symbol_order_less"]
+__all__ = [
+    "BruteForceMatcher", "Match", "Rete", "check_production", "symbol_order_less",
+    "kernel_refusals", "load_warnings",
+]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -276,10 +279,27 @@ def _check_scope(
     production: Production, elements: tuple[ConditionElement, ...], outer_linked: set[str],
     outer_bound: set[str], links: bool,
 ) -> None:
-    """Check linkage and bound relational variables of one scope (the production, or the
-    inside of a conjunctive negation, whose own positive conditions bind local variables)."""
+    """Check one scope (the production, or the inside of a conjunctive negation, whose own
+    positive conditions bind local variables): its conjunctive negations are not empty, its
+    negated conditions' relational tests compare with bound variables, and (``links``
+    only) every condition is linked to a state."""
     bound = outer_bound | _bound_by(elements)
-    linked = set(outer_linked)
+    linked = _linked(elements, outer_linked)
+    for element in elements:
+        if isinstance(element, ConjunctiveNegation):
+            if not element.conditions:
+                raise SoarSemanticError(production.name, "empty conjunctive negation -{ }",
+                                        production.location)
+            _check_scope(production, element.conditions, linked, bound, links)
+            continue
+        _check_condition(production, element, linked, bound, links)
+
+
+def _linked(elements: Iterable[ConditionElement], outer: set[str]) -> set[str]:
+    """``outer`` and the identifiers the positive conditions of one scope reach from the
+    states: a state or impasse condition's identifier, then the values of conditions on
+    reached identifiers (the kernel's "connected to a goal": never through attributes)."""
+    linked = set(outer)
     positives = [e for e in elements if isinstance(e, Condition) and not e.negated]
     for cond in positives:
         if cond.goal is not None:
@@ -289,18 +309,11 @@ def _check_scope(
         grown = False
         for cond in positives:
             if linked.intersection(equality_vars(cond.id_test)):
-                new = set(equality_vars(cond.value_test))  # the kernel links through values
+                new = set(equality_vars(cond.value_test))
                 if not new <= linked:
                     linked |= new
                     grown = True
-    for element in elements:
-        if isinstance(element, ConjunctiveNegation):
-            if not element.conditions:
-                raise SoarSemanticError(production.name, "empty conjunctive negation -{ }",
-                                        production.location)
-            _check_scope(production, element.conditions, linked, bound, links)
-            continue
-        _check_condition(production, element, linked, bound, links)
+    return linked
 
 
 def _check_condition(
@@ -317,14 +330,15 @@ def _check_condition(
         raise SoarSemanticError(name, f"condition {_show(cond)} is not linked to a state: "
                                 f"<{ids[0]}> is not reachable from a state or impasse "
                                 "condition", production.location)
-    scope = bound
-    if cond.negated:
-        scope = bound.union(*(equality_vars(t) for t in _fields(cond)))
-    for test in _fields(cond):
-        for var in relational_vars(test):
-            if var not in scope:
-                raise SoarSemanticError(name, f"variable <{var}> in a relational test of "
-                                        f"{_show(cond)} is never bound", production.location)
+    _check_relations(production, cond, bound)
+
+
+def _relation_text(test: Test, var: str) -> str:
+    """The relational test of ``test`` that compares with ``<var>``, as written."""
+    for inner in _atoms(test):
+        if isinstance(inner, Relational) and inner.operand == Var(var):
+            return f"{inner.op} <{var}>"
+    return f"<{var}>"
 
 
 def _show(cond: Condition) -> str:
@@ -346,24 +360,124 @@ def _show(cond: Condition) -> str:
             f"{text(cond.value_test)}{plus})")
 
 
-def check_production(production: Production, links: bool = True) -> None:
-    """Raise :class:`SoarSemanticError` naming the production when it cannot be matched.
+def check_production(production: Production, links: bool = False) -> None:
+    """Raise :class:`SoarSemanticError` naming the production when the kernel refuses it.
 
-    The first condition must be a positive ``state``/``impasse`` condition, every
-    condition's identifier must be reachable from a state through positive conditions,
-    and every variable used in a relational test must be bound (by a positive condition,
-    or — inside a negation — locally by the negation itself).  A variable that appears only
-    inside a negation is legal: it is local to the negation.
+    Measured in soar_sml 9.6, the kernel refuses a production whose match has no root
+    (see `_roots`: no ``state`` condition, and every positive condition's identifier is
+    the value of another, as in ``(<s> ^a <s>)`` or only negations), and a negated condition
+    with a relational test on a variable no positive condition binds (its own equality
+    tests do not count: ``-(<s> ^b {<z> > <z>})`` is refused).  Everything else loads, in
+    any order: a negation first, conditions no state reaches (it warns, see
+    :func:`load_warnings`), identifiers reached only through an attribute variable.  It
+    silently drops a relational test of a positive condition on a variable that nothing
+    binds (the parser does that too, see ``syntax._drop_unbound_relations``); here such a
+    test is refused, as a production built by hand that holds one does not say what it
+    means.  A variable that appears only inside a negation is local to it.
 
-    ``links=False`` drops the two linkage rules (the kernel loads such productions with a
-    warning) but still requires a positive first condition.
+    ``links=True`` adds a rule stricter than the kernel's: every condition must be linked
+    to a state through positive conditions.
     """
-    conditions = production.conditions
-    first = conditions[0] if conditions else None
-    if not isinstance(first, Condition) or first.negated or (links and first.goal is None):
-        raise SoarSemanticError(production.name, "the first condition must test a state: "
-                                "(state <s> ...) or (impasse <s> ...)", production.location)
-    _check_scope(production, conditions, set(), set(), links)
+    kernel_refusals(production)
+    _check_scope(production, production.conditions, set(), set(), links)
+
+
+def kernel_refusals(production: Production) -> None:
+    """The refusals of :func:`check_production` that the kernel makes when it loads a
+    production (the parser makes them too): no root, and a negated condition's relational
+    test on a variable no positive condition binds."""
+    if not _roots(production.conditions, set(), top=True)[0]:
+        raise SoarSemanticError(production.name, "no positive condition tests a state and "
+                                "each identifier is the value of another condition, so the "
+                                "match has nowhere to start: add a condition such as (state "
+                                "<s> ^superstate nil)", production.location)
+    _check_negated_relations(production, production.conditions, set())
+
+
+def _check_negated_relations(production: Production, elements: tuple[ConditionElement, ...],
+                             outer: set[str]) -> None:
+    bound = outer | _bound_by(elements)
+    for element in elements:
+        if isinstance(element, ConjunctiveNegation):
+            _check_negated_relations(production, element.conditions, bound)
+        elif element.negated:
+            _check_relations(production, element, bound)
+
+
+def _check_relations(production: Production, cond: Condition, bound: set[str]) -> None:
+    """Every relational test of ``cond`` compares with a variable in ``bound``."""
+    for test in _fields(cond):
+        for var in relational_vars(test):
+            if var in bound:
+                continue
+            if cond.negated:
+                raise SoarSemanticError(production.name, "unbound referent in negated "
+                                        f"relational test {_relation_text(test, var)} of "
+                                        f"{_show(cond)}: a negated condition can only compare "
+                                        "with a variable bound by a positive condition",
+                                        production.location)
+            raise SoarSemanticError(production.name, f"variable <{var}> in a relational test "
+                                    f"of {_show(cond)} is never bound", production.location)
+
+
+def _roots(elements: Iterable[ConditionElement], outer: set[str], top: bool
+           ) -> tuple[list[str], set[str]]:
+    """The kernel's root variables of one scope (reorder.cpp's ``collect_root_variables``,
+    as measured in soar_sml 9.6), in written order: the identifiers of its positive
+    conditions that are neither bound outside it (``outer``) nor the value of one of its
+    positive conditions; at the top, when there are none, the identifier of the first
+    ``state`` condition (``(state <s> ^a <s>)`` loads, ``(impasse <s> ^a <s>)`` does not).
+    Also returned: the identifiers of state and impasse conditions (never warned about)."""
+    positives = [e for e in elements if isinstance(e, Condition) and not e.negated]
+    values = set(outer)
+    for cond in positives:
+        values.update(equality_vars(cond.value_test))
+    roots: dict[str, None] = {}
+    goals: set[str] = set()
+    for cond in positives:
+        for name in equality_vars(cond.id_test):
+            if cond.goal is not None:
+                goals.add(name)
+            if name not in values:
+                roots.setdefault(name, None)
+    if not roots and top:
+        first = next((c for c in positives if c.goal == "state"), None)
+        if first is not None:
+            roots = dict.fromkeys(equality_vars(first.id_test))
+    return list(roots), goals
+
+
+def load_warnings(production: Production) -> list[str]:
+    """What the kernel warns about when it loads the production (it loads it anyway): each
+    root identifier of a scope that is not a state or impasse ("identifier <x> is not
+    connected to any goal or impasse"), and positive conditions that no root reaches by
+    binding identifiers in any field ("the LHS conditions are not all connected")."""
+    found: list[str] = []
+    _scope_warnings(production.conditions, set(), found, top=True)
+    return list(dict.fromkeys(found))
+
+
+def _scope_warnings(elements: tuple[ConditionElement, ...], outer: set[str],
+                    found: list[str], top: bool) -> None:
+    roots, goals = _roots(elements, outer, top)
+    found.extend(f"identifier <{name}> is not connected to any goal or impasse"
+                 for name in roots if name not in goals)
+    bound = outer | set(roots)
+    waiting = [e for e in elements if isinstance(e, Condition) and not e.negated]
+    placed = True
+    while waiting and placed:
+        placed = False
+        for cond in list(waiting):
+            if bound.intersection(equality_vars(cond.id_test)):
+                waiting.remove(cond)
+                bound.update(*(equality_vars(test) for test in _fields(cond)))
+                placed = True
+    if waiting:
+        found.append("the LHS conditions are not all connected")
+    inner_outer = outer | _bound_by(elements)
+    for element in elements:
+        if isinstance(element, ConjunctiveNegation):
+            _scope_warnings(element.conditions, inner_outer, found, top=False)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -506,7 +620,7 @@ class BruteForceMatcher:
     the Rete's property tests.
     """
 
-    def __init__(self, check_links: bool = True) -> None:
+    def __init__(self, check_links: bool = False) -> None:
         self.check_links = check_links
         self._productions: dict[str, Production] = {}
         self._wmes: dict[WME, None] = {}
@@ -2109,12 +2223,12 @@ class Rete:
     """Doorenbos's Rete with hashed alpha and beta memories, negative and NCC nodes and
     shared prefixes.  Same interface as :class:`BruteForceMatcher`.
 
-    ``check_links=False`` accepts conditions that are not linked to a state, and a first
-    condition without ``state`` (the real kernel only warns about both); they are joined on
-    any bound variable, or as a cross product.
+    Conditions not linked to a state load, as in the kernel (which warns about them); they
+    are joined on any bound variable, or as a cross product.  ``check_links=True`` refuses
+    them instead (see :func:`check_production`).
     """
 
-    def __init__(self, check_links: bool = True) -> None:
+    def __init__(self, check_links: bool = False) -> None:
         self.check_links = check_links
         self._root = _Node(self, None)
         self._root_token = _new_token(None, None, (), self._root)
@@ -2716,12 +2830,13 @@ def _node_keys(reorder: Any, ordered: list) -> list[object]:
         return _KERNEL_VAR.sub(
             lambda m: names.setdefault(m.group(0), f"<{len(names)}>"), text)
 
-    keys: list[object] = []
-    for kcond in ordered:
+    def key(kcond: Any) -> object:
+        # A -{...} may hold another -{...}: its key is made of its own conditions' keys.
         if kcond.is_ncc:
-            keys.append(("ncc", tuple(canonical(reorder.format_kcond(c)) for c in kcond.inner)))
-        else:
-            keys.append(canonical(reorder.format_kcond(kcond)))
+            return ("ncc", tuple(key(c) for c in kcond.inner))
+        return canonical(reorder.format_kcond(kcond))
+
+    keys: list[object] = [key(kcond) for kcond in ordered]
     if len(_NODE_KEYS) >= 4096:
         _NODE_KEYS.clear()
     _NODE_KEYS[id(ordered)] = (ordered, keys)

@@ -16,7 +16,13 @@ what a grammar cannot say:
   becomes a fresh variable, ``^a v1 v2`` one condition per value, ``-( ... )`` of several
   conditions a conjunctive negation, several preferences on one value several actions, and
   preferences other than ``+``/``-`` off ``^operator`` are dropped with a `SoarWarning`;
-- the checks the kernel makes when it loads a production: ``(state <s>)`` with no attribute
+- the kernel's load-time rewriting of conditions: a relational test of a positive condition
+  on a variable nothing binds is dropped (`_drop_unbound_relations`), and the negation of one
+  conjunctive negation is its conditions; and its warnings (`rete.load_warnings`: identifiers
+  not connected to a state, conditions not all connected);
+- the checks the kernel makes when it loads a production: no root for the match and
+  relational tests of negated conditions on unbound variables (`rete.kernel_refusals`),
+  ``(state <s>)`` with no attribute
   test, RHS actions whose identifier is not grounded, unbound function arguments, binary
   preferences off ``^operator``, numbers out of range, RHS functions called where they may
   not be (a value-only function as a stand-alone action or the reverse) or with the wrong
@@ -40,7 +46,7 @@ import re
 import sys
 import threading
 import warnings
-from collections.abc import Collection, Iterator
+from collections.abc import Callable, Collection, Iterator
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -76,6 +82,7 @@ from sann.soar.production import (
     Test,
     Var,
 )
+from sann.soar.rete import equality_vars, kernel_refusals, load_warnings
 
 __all__ = [
     "GRAMMAR_PATH",
@@ -545,7 +552,12 @@ class _ToDataclasses(Transformer):
         conditions = [c for group in rest[:arrow] for c in group]
         actions = [a for group in rest[arrow + 1 :] for a in group]
         production = Production(
-            name, tuple(conditions), tuple(actions), doc, tuple(flags), self._location(sp)
+            name,
+            _drop_unbound_relations(tuple(conditions), set(), self._fresh_variable),
+            tuple(actions),
+            doc,
+            tuple(flags),
+            self._location(sp),
         )
         if self._fresh_names:
             names = _fresh_names(self._fresh_names, self._used)
@@ -557,6 +569,7 @@ class _ToDataclasses(Transformer):
         self._fresh_names.clear()
         self._used.clear()
         production = _check_production(production, self.functions)
+        self._warnings.extend(load_warnings(production))
         self.warnings.extend(_where(production) + message for message in self._warnings)
         self._warnings.clear()
         self.completed.append(production)
@@ -587,11 +600,65 @@ def _is_comma(item: object) -> bool:
 
 def _negate(elements: list[ConditionElement]) -> list[ConditionElement]:
     """``-`` before a condition or group, as the kernel does it: one condition flips its
-    sign (``-(<s> -^a b)`` is positive); several become a conjunctive negation."""
+    sign (``-(<s> -^a b)`` is positive), one conjunctive negation gives back its conditions
+    (``-(<s> -^a.b c)`` is ``(<s> ^a <a*1>) (<a*1> ^b c)``, measured in soar_sml 9.6);
+    several become a conjunctive negation."""
     if len(elements) == 1 and isinstance(elements[0], Condition):
         only = elements[0]
         return [dataclasses.replace(only, negated=not only.negated)]
+    if len(elements) == 1 and isinstance(elements[0], ConjunctiveNegation):
+        return list(elements[0].conditions)
     return [ConjunctiveNegation(tuple(elements))] if elements else []
+
+
+def _drop_unbound_relations(
+    elements: tuple[ConditionElement, ...], outer: set[str], fresh: Callable[[str], Var]
+) -> tuple[ConditionElement, ...]:
+    """The conditions without the relational tests of positive conditions on variables that
+    no positive condition of their scope binds: the kernel drops them silently (measured in
+    soar_sml 9.6: ``(state <s> ^c < <y>)`` with ``<y>`` bound nowhere, or only inside a
+    negation, loads and prints as ``(state <s> ^c <c*1>)``, and matches any ``^c``). A field
+    left with no test gets a fresh variable, as the kernel's does. Negated conditions keep
+    theirs: the kernel refuses those (`rete.check_production`)."""
+    bound = outer | _lhs_bound(elements)
+    kept: list[ConditionElement] = []
+    for element in elements:
+        if isinstance(element, ConjunctiveNegation):
+            inner = _drop_unbound_relations(element.conditions, bound, fresh)
+            kept.append(ConjunctiveNegation(inner))
+        elif element.negated:
+            kept.append(element)
+        else:
+            letter = _first_letter(element.attr_test)
+            kept.append(dataclasses.replace(
+                element,
+                id_test=_without_unbound(element.id_test, bound, "s", fresh),
+                attr_test=_without_unbound(element.attr_test, bound, "a", fresh),
+                value_test=_without_unbound(element.value_test, bound, letter, fresh),
+            ))
+    return tuple(kept)
+
+
+def _without_unbound(test: Test, bound: set[str], letter: str, fresh: Callable[[str], Var]) -> Test:
+    """``test`` without its relational tests on variables outside ``bound``."""
+    if _compares_unbound(test, bound):
+        return fresh(letter)
+    if not isinstance(test, Conjunction):
+        return test
+    kept = tuple(t for t in test.tests if not _compares_unbound(t, bound))
+    if len(kept) == len(test.tests):
+        return Conjunction(tuple(_without_unbound(t, bound, letter, fresh) for t in kept))
+    if not kept:
+        return fresh(letter)
+    return kept[0] if len(kept) == 1 else Conjunction(kept)
+
+
+def _compares_unbound(test: Test, bound: set[str]) -> bool:
+    return (
+        isinstance(test, Relational)
+        and isinstance(test.operand, Var)
+        and test.operand.name not in bound
+    )
 
 
 def _calls(value: object) -> Iterator[FuncCall]:
@@ -691,6 +758,7 @@ def _check_production(production: Production, functions: Collection[str]) -> Pro
             if checked:
                 _check_signature(production, call, call is stand_alone)
             _check_refusal(production, call)
+    kernel_refusals(production)
     actions = _reorder_actions(production)
     _check_binary_preferences(production)
     if actions != production.actions:
@@ -739,13 +807,12 @@ def _refuse_call(production: Production, message: str) -> None:
 
 
 def _lhs_bound(elements: tuple[ConditionElement, ...]) -> set[str]:
-    """Variables bound by equality tests of the positive top-level conditions."""
+    """Variables bound by equality tests of the positive conditions of one scope."""
     bound: set[str] = set()
     for element in elements:
         if isinstance(element, Condition) and not element.negated:
             for test in (element.id_test, element.attr_test, element.value_test):
-                tests = test.tests if isinstance(test, Conjunction) else (test,)
-                bound.update(t.name for t in tests if isinstance(t, Var))
+                bound.update(equality_vars(test))
     return bound
 
 

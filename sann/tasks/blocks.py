@@ -809,7 +809,8 @@ def make_dataset(
     Every scene is planned by ``rules`` in ``engine``; the fusion column is eq. 2 over the
     target's sequences. The cache key covers every argument except ``engine``, ``progress``
     and ``use_cache`` (the engines give identical plans: tests/tasks/test_planning.py checks
-    it), plus the rule file's sha256 and ``DATASET_VERSION``. ``workers`` processes plan the
+    it), plus the sha256 of the rule file's code (``sann.cache.soar_code_sha256``: comments do
+    not count) and ``DATASET_VERSION``. ``workers`` processes plan the
     scenes (None: one per CPU core); every scene has its own seed, so the arrays do not depend
     on it. ``cap``/``horizon`` default to the planner's (8 sequences, T_o <= 8).
     """
@@ -830,10 +831,10 @@ def make_dataset(
                            horizon=DEFAULT_HORIZON if horizon is None else horizon,
                            clearance=float(params.gripper_finger_width),
                            margin=float(params.finger_margin))
-    rules_sha = cache.file_sha256(config.rules)
+    rules_code = cache.soar_code_sha256(config.rules)
     description = {
         "kind": kind, "mode": mode, "n_train": n_train, "n_test": n_test, "seed": int(seed),
-        "params": asdict(params), "rules_sha256": rules_sha, "cap": config.cap,
+        "params": asdict(params), "rules_code_sha256": rules_code, "cap": config.cap,
         "horizon": config.horizon, "version": DATASET_VERSION,
     }
 
@@ -847,7 +848,8 @@ def make_dataset(
     arrays, hit = cache.get_or_build(f"blocks-{kind}-{mode}", description, build,
                                      use_cache=use_cache)
     meta = {**description, **json.loads(str(arrays.pop("meta")))}
-    meta.update(cache_hit=hit, seconds=time.perf_counter() - t0)
+    meta.update(cache_hit=hit, seconds=time.perf_counter() - t0,
+                rules_sha256=cache.file_sha256(config.rules))
     return BlockDataset(kind=kind, mode=mode, feature_names=feature_names_for(kind), meta=meta,
                         **arrays)
 

@@ -22,9 +22,9 @@ simulator; only the labels look at the true poses. Per pile:
    approach corridor, reachable, at least half visible). A detection that matches no true cup
    is a pose the gripper would act on wrongly, so it is labelled not graspable.
 
-Datasets are cached per split (``sann.cache``: keyed on every parameter, the rule file's
-sha256, the sources of ``sann/vision`` and ``DATASET_VERSION``; written atomically), so the
-book and the tests rebuild nothing that has not changed.
+Datasets are cached per split (``sann.cache``: keyed on every parameter, the sha256 of the
+rule file's code without comments, the sources of ``sann/vision`` and ``DATASET_VERSION``;
+written atomically), so the book and the tests rebuild nothing that has not changed.
 """
 
 from __future__ import annotations
@@ -577,7 +577,7 @@ def _cached_split(split: str, n_piles: int, seed: int, params: CupsDataParams,
 
     description = {
         "split": split, "piles": n_piles, "seed": seed, "params": asdict(params),
-        "methods": list(methods), "rules_sha256": cache.file_sha256(planner.rules),
+        "methods": list(methods), "rules_code_sha256": cache.soar_code_sha256(planner.rules),
         "cap": planner.cap, "vision_sha256": vision_sha256(), "version": DATASET_VERSION,
     }
     return cache.get_or_build(

@@ -267,6 +267,14 @@ class Planner:
             result[seq.target].append(seq)
         return {t: sorted(v, key=lambda s: (s.pair, s.t_o, s.order)) for t, v in result.items()}
 
+    @property
+    def agent(self):  # -> sann.soar.Agent (imported lazily, as the backend does)
+        """Our engine's agent, its working memory as the last run left it (the scene on the
+        input-link, the plans on the output-link): what a reader inspects or draws."""
+        if not isinstance(self._backend, _SannBackend) or self._backend.agent is None:
+            raise ValueError("only a planner of engine 'sann' that is not closed has an agent")
+        return self._backend.agent
+
     def close(self) -> None:
         self._backend.close()
 

@@ -3,6 +3,7 @@ an in-process kernel with the rule file sourced, plans read back from the output
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -15,6 +16,9 @@ class SmlAgent:
 
         self.kernel = sml.Kernel.CreateKernelInCurrentThread(True, 0)
         self.agent = self.kernel.CreateAgent(f"{name}{id(self)}")
+        # The kernel reads the file in C++, which raises no audit event: raise the one Python's
+        # open() would, so that recorders of what was read (sann.bookcache) see this read too.
+        sys.audit("open", str(rules), "r", 0)
         result = self.agent.ExecuteCommandLine(f"source {{{rules}}}")
         if not self.agent.GetLastCommandLineResult():
             raise RuntimeError(f"soar_sml could not source {rules}: {result}")

@@ -58,9 +58,11 @@ def test_srand_makes_random_choices_reproducible() -> None:
 
 
 @pytest.mark.parametrize("text", ["learn --on", "chunk always", "learn -e"])
-def test_learning_on_is_refused(text: str) -> None:
-    with pytest.raises(SoarRuntimeError, match="learning"):
-        agent_with(text)
+def test_learning_on_loads_and_running_with_it_is_refused(text: str) -> None:
+    agent, _ = agent_with(text)  # as the kernel, the setting is accepted and recorded
+    assert agent.learning == "always"
+    with pytest.raises(SoarRuntimeError, match="learning is on"):
+        agent.run(1)
 
 
 @pytest.mark.parametrize("text", ["excise-everything now", "rl --set learning on", "gp {}"])

@@ -87,7 +87,8 @@ def test_constants(value: object, text: str) -> None:
 def test_keywords_are_quoted_only_as_identifier_tests() -> None:
     assert format_constant("state") == "state"
     assert format_constant("state", keyword_safe=True) == "|state|"
-    production = Production("p", (Condition(Const("state"), Const("a"), Const("state")),), ())
+    state = Condition(Var("s"), Const("a"), Const("b"), goal="state")
+    production = Production("p", (state, Condition(Const("state"), Const("a"), Const("state"))), ())
     assert "(|state| ^a state)" in format_production(production)
     assert parse(format_production(production)) == [production]
 

@@ -169,12 +169,12 @@ def test_negated_attribute_test_and_negated_condition() -> None:
 
 
 def test_negated_attribute_without_value() -> None:
-    assert lhs("(state <s> -^a)")[0] == cond("<s>", "a", "<a*1>", negated=True, goal="state")
+    assert lhs("(state <s> ^x y -^a)")[1] == cond("<s>", "a", "<a*1>", negated=True, goal="state")
 
 
 def test_negated_path_and_negated_multivalue_are_conjunctive_negations() -> None:
     # Kernel: -^d.e f prints as -{ (<s> ^d <d*1>) (<d*1> ^e f) }; -^a b c as -{ (<s> ^a b ^a c) }.
-    assert lhs("(state <s> -^d.e f)") == (
+    assert lhs("(state <s> ^x y -^d.e f)")[1:] == (
         ConjunctiveNegation((cond("<s>", "d", "<d*1>", goal="state"), cond("<d*1>", "e", "f"))),
     )
     assert lhs("(state <s> ^x y -^a b c)")[1] == ConjunctiveNegation(
@@ -222,13 +222,26 @@ def test_disjunction_and_conjunction() -> None:
 
 
 def test_tests_in_identifier_and_attribute_positions() -> None:
-    [c] = lhs("(state { <s> <> <t> } ^{ <> name <> type })")
+    c, _ = lhs("(state { <s> <> <t> } ^{ <> name <> type }) (<s> ^b <t>)")
     assert c.id_test == Conjunction((S, Relational("<>", Var("t"))))
     assert c.attr_test == Conjunction(
         (Relational("<>", Const("name")), Relational("<>", Const("type")))
     )
     assert c.value_test == Var("v*1")  # no letter to take from the attribute test
     assert lhs("(state <s> ^<attr> <v>)")[0].attr_test == Var("attr")
+
+
+def test_relational_tests_on_variables_nothing_binds_are_dropped() -> None:
+    # The kernel drops them from positive conditions (in any field, also inside a
+    # conjunctive negation) and prints (state <s> ^c <c*1>) for (state <s> ^c < <y>).
+    [c] = lhs("(state { <s> <> <t> } ^{ <a> <> <u> } { < <y> <v> })")
+    assert (c.id_test, c.attr_test, c.value_test) == (S, Var("a"), Var("v"))
+    [c] = lhs("(state <s> ^c < <y>)")
+    assert c.value_test == Var("c*1")
+    [c, ncc] = lhs("(state <s> ^a <x>) -{(<s> ^b <z>) (<z> ^c { > <q> > <x> })}")
+    assert ncc.conditions[1].value_test == Relational(">", Var("x"))
+    [c, neg] = lhs("(state <s> ^c < <y>) -(<s> ^d <y>)")  # bound only by a negation
+    assert c.value_test == Var("c*1") and neg.value_test == Var("y")
 
 
 @pytest.mark.parametrize(
@@ -507,7 +520,7 @@ def test_caret_keeps_tabs_aligned() -> None:
         ("sp {p (state <s> ^a b) --> (<s> ^a (+ <z> 1))}", ["<z>"]),
         ("sp {p (state <s> ^a b) --> (write <z>)}", ["<z>"]),
         ("sp {p (state <s> ^a b) --> (<x> ^c d) (<y> ^b <x>)}", ["<x>"]),
-        ("sp {p (state <s> -^a <n>) --> (<n> ^b c)}", ["<n>"]),
+        ("sp {p (state <s> ^x y -^a <n>) --> (<n> ^b c)}", ["<n>"]),
         ("sp {p (state <s> ^a b) -{(<s> ^c <n>) (<n> ^d e)} --> (<n> ^b c)}", ["<n>"]),
         ("sp {p (state <s> ^a > <n>) --> (write <n>)}", ["<n>"]),
         ("sp {p (state <s> ^a b) --> (<s> ^c (foo 1))}", ["unknown RHS function 'foo'"]),
@@ -587,9 +600,10 @@ def test_parsing_a_file_of_200_productions_is_fast() -> None:
 
 # Tricky productions: the kernel must accept exactly those we accept. Not listed, because we
 # differ on purpose: unknown RHS functions and exec/cmd (the kernel rewrites an unknown
-# function into `exec`; we refuse both), and the "condition not linked to a state" family,
-# which the kernel accepts with a warning and our matcher refuses at add_production; numbers
-# too large for 64 bits, which the kernel reports as "bad integer" and then loads anyway.
+# function into `exec`; we refuse both); numbers too large for 64 bits, which the kernel
+# reports as "bad integer" and then loads anyway. The matcher's load-time checks (conditions
+# not linked to a state, relational tests on unbound variables) are compared with the kernel
+# in test_load_checks_kernel.py.
 KERNEL_AGREEMENT = [
     "(state <s> ^a.b.c <v> -^d.e f) --> (<s> ^x.y z)",
     "(state <s>) --> (write hi)",

@@ -399,16 +399,25 @@ class KernelAgent:
 
 
 def run_kernel(
-    path: str | Path, decisions: int | None = None, inputs: Inputs | None = None
+    path: str | Path, decisions: int | None = None, inputs: Inputs | None = None,
+    commands: Iterable[str] = (), *, before: Iterable[str] = (),
 ) -> RunResult:
     """Run an agent file in the real Soar kernel and collect a :class:`RunResult`.
 
-    ``decisions`` and ``inputs`` override the file's header comments.
+    ``decisions`` and ``inputs`` override the file's header comments; ``commands`` run
+    after the file is sourced (``srand 3``, ``indifferent-selection --first``), ``before``
+    before it (so that a file's own ``chunk always`` can be overridden by a ``chunk never``
+    in ``commands``, or a seed given before the file's productions are loaded); what they
+    print is dropped like sourcing's output.
     """
     spec = read_spec(path)
     limit = decisions if decisions is not None else spec.decisions
     with KernelAgent() as ka:
+        for line in before:
+            ka.cmd(line)
         ka.cmd(f"source {{{Path(path).resolve()}}}")
+        for line in commands:
+            ka.cmd(line)
         ka.take_log()
         ka.cmd("watch 1")
         ka.add_inputs(spec.inputs if inputs is None else inputs)
@@ -431,9 +440,11 @@ def run_kernel(
 
 
 def run_ours(
-    path: str | Path, decisions: int | None = None, inputs: Inputs | None = None
+    path: str | Path, decisions: int | None = None, inputs: Inputs | None = None,
+    commands: Iterable[str] = (), *, before: Iterable[str] = (),
 ) -> RunResult:
-    """Run an agent file in SANN's engine (``sann.soar.Agent``) and collect a RunResult.
+    """Run an agent file in SANN's engine (``sann.soar.Agent``) and collect a RunResult
+    (``commands`` and ``before`` as for :func:`run_kernel`).
 
     The engine writes only ``write`` output to ``out`` (trace level 0); the operator-name
     sequence comes from ``agent.operator_sequence`` and working memory from ``agent.wmes()``.
@@ -444,7 +455,11 @@ def run_ours(
     limit = decisions if decisions is not None else spec.decisions
     out = io.StringIO()
     agent = Agent(out=out)
+    for line in before:
+        agent.load(line)
     agent.source(str(path))
+    for line in commands:
+        agent.load(line)
     # The kernel half drops what sourcing printed (``source`` returns the text of ``echo``,
     # ``print`` or ``stats`` and the trace of a ``run`` goes to the discarded log); so do we.
     out.seek(0)

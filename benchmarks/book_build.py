@@ -1,0 +1,133 @@
+"""How long `make book` takes: from a fresh clone, after a prose edit, after a rule edit.
+
+Usage::
+
+    .venv/bin/python benchmarks/book_build.py [--keep] [--copy-engine] [--jobs 2]
+
+Everything happens in a temporary ``git clone`` of this repository's HEAD, so the working tree
+is never edited and no cache of it is used. The clone runs ``make book`` with this checkout's
+virtual environment (``VENV=``, its install stamp taken as up to date: nothing is installed)
+and imports its own sources (``PYTHONPATH``). Three builds, in order:
+
+1. fresh: no execution cache, no dataset cache, no compiled engine (``--copy-engine`` copies
+   this checkout's compiled engine when it was built from the same sources, to skip gcc);
+2. prose edit: one sentence added to a paragraph of ``book/networks.md``;
+3. rule edit: one comment line of ``rules/blocks.soar`` changed. The file changed, so every
+   chapter that read it executes again; the datasets planned with it are keyed on its code
+   without comments (``sann.cache.soar_code_sha256``) and come from the cache. An edit of a
+   production also plans the datasets again, which costs what the networks chapter costs in
+   the fresh build.
+
+It prints each build's wall and CPU seconds (this process's children: on a shared machine the
+wall time also counts other users), its ratio to the fresh build (the anchor, measured in the
+same run), the chapters it executed with their seconds, and the issue's targets.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import resource
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+TARGETS = {"fresh": 600.0, "prose edit": 60.0, "rule edit": 240.0}
+EXECUTED = re.compile(r"\[bookcache\] executed (\S+) in ([0-9.]+) s")
+
+
+def cpu_seconds() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def make_book(clone: Path, venv: Path, jobs: int) -> tuple[float, float, dict[str, float]]:
+    """Run ``make book`` in the clone: (wall s, CPU s, {chapter: execution s})."""
+    env = {k: v for k, v in os.environ.items() if k not in ("JPY_SESSION_NAME", "SANN_CACHE")}
+    env.update(PYTHONPATH=str(clone), SANN_BOOK_JOBS=str(jobs))
+    cmd = ["make", f"VENV={venv}", "-o", str(venv / ".installed"), "book"]
+    wall, cpu = time.perf_counter(), cpu_seconds()
+    done = subprocess.run(cmd, cwd=clone, env=env, capture_output=True, text=True)
+    wall, cpu = time.perf_counter() - wall, cpu_seconds() - cpu
+    if done.returncode != 0:
+        sys.exit(f"make book failed in {clone}:\n{done.stdout[-4000:]}\n{done.stderr[-4000:]}")
+    chapters = {Path(uri).stem: float(s) for uri, s in EXECUTED.findall(done.stdout + done.stderr)}
+    return wall, cpu, chapters
+
+
+def copy_engine(clone: Path) -> bool:
+    """Copy this checkout's compiled engine into the clone when built from the same sources."""
+    sys.path.insert(0, str(ROOT / "sann" / "soar"))
+    import compiled  # the standard-library-only module setup.py loads the same way
+
+    here, there = ROOT / "sann" / "soar", clone / "sann" / "soar"
+    if compiled.read_manifest(here / "_engine.sha256") != compiled.source_hashes(there):
+        return False
+    for path in [*here.glob("*.so"), here / "_engine.sha256"]:
+        shutil.copy2(path, there / path.name)
+    return True
+
+
+def prose_edit(clone: Path) -> None:
+    path = clone / "book" / "networks.md"
+    text = path.read_text(encoding="utf-8")
+    anchor = "## Standardisation on the training set\n\n"
+    if anchor not in text:
+        sys.exit(f"{path}: the paragraph to edit is gone ({anchor.strip()!r})")
+    path.write_text(text.replace(anchor, anchor + "A sentence added by the benchmark. ", 1),
+                    encoding="utf-8")
+
+
+def rule_edit(clone: Path) -> None:
+    path = clone / "rules" / "blocks.soar"
+    lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
+    index = next(i for i, line in enumerate(lines) if line.startswith("# "))
+    lines[index] = lines[index].rstrip("\n") + " (edited by the benchmark)\n"
+    path.write_text("".join(lines), encoding="utf-8")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--keep", action="store_true", help="keep the temporary clone")
+    parser.add_argument("--copy-engine", action="store_true",
+                        help="copy the compiled engine instead of compiling it")
+    parser.add_argument("--jobs", type=int, default=2, help="chapters executed at a time")
+    args = parser.parse_args()
+    venv = Path(sys.prefix)
+    work = Path(tempfile.mkdtemp(prefix="sann-book-build-"))
+    clone = work / "sann"
+    try:
+        subprocess.run(["git", "clone", "--quiet", str(ROOT), str(clone)], check=True)
+        if args.copy_engine:
+            print("compiled engine copied" if copy_engine(clone)
+                  else "compiled engine not copied (other sources): make compiles it")
+        results = {}
+        for step, edit in (("fresh", None), ("prose edit", prose_edit),
+                           ("rule edit", rule_edit)):
+            if edit is not None:
+                edit(clone)
+            results[step] = make_book(clone, venv, args.jobs)
+            wall, cpu, chapters = results[step]
+            ran = ", ".join(f"{c} {s:.0f} s" for c, s in sorted(chapters.items())) or "none"
+            print(f"{step:>10s}: {wall:7.1f} s wall, {cpu:7.1f} s CPU; executed: {ran}",
+                  flush=True)
+        anchor = results["fresh"][0]
+        print(f"\n{'build':>10s} {'wall s':>8s} {'/ fresh':>8s} {'target s':>9s}")
+        for step, (wall, _, _) in results.items():
+            verdict = "ok" if wall <= TARGETS[step] else "over"
+            print(f"{step:>10s} {wall:8.1f} {wall / anchor:8.3f} {TARGETS[step]:9.0f} {verdict}")
+        print(f"load average at the end: {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
+    finally:
+        if args.keep:
+            print(f"clone kept at {clone}")
+        else:
+            shutil.rmtree(work, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()
