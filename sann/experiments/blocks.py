@@ -235,7 +235,8 @@ def _description(kind: str, mode: str, data_seed: int, config: BlocksExperiment)
     for key in ("data_seeds", "resamples", "tsne_points", "workers"):
         settings.pop(key)
     return {"kind": kind, "mode": mode, "data_seed": int(data_seed), "settings": settings,
-            "params": asdict(BlockWorldParams()), "rules_sha256": cache.file_sha256(DEFAULT_RULES),
+            "params": asdict(BlockWorldParams()),
+            "rules_code_sha256": cache.soar_code_sha256(DEFAULT_RULES),
             "dataset_version": DATASET_VERSION, "code_sha256": code_sha256()}
 
 
