@@ -1,8 +1,11 @@
 """Training and evaluation of the graspability nets, with fixed seeds and seed statistics.
 
 Inputs are standardised with statistics of the training set only (the test set must not leak
-into the model). Every reported figure is a mean over several seeds with a 95% Student-t
-interval, because a single run of a 5-unit net says little.
+into the model). A single run of a 5-unit net says little, so every reported figure comes
+from several seeds: :func:`summarise` gives a mean with a 95% Student-t interval over seeds
+(the cup experiment); the block experiment resamples test scenes, data seeds and seeds
+together (:func:`sann.experiments.blocks.bootstrap`), because the samples of one scene are
+not independent.
 """
 
 from __future__ import annotations

@@ -6,6 +6,7 @@ writes a PNG (so `python -m sann reproduce ...` leaves files behind).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -92,4 +93,44 @@ def tsne_pair(
         ax.set_yticks([])
     np.atleast_1d(axes)[0].legend(loc="best", markerscale=3, fontsize=8)
     fig.suptitle(title)
+    return _save(fig, path)
+
+
+def learning_curves(
+    curves: Mapping[str, Mapping[str, object]],
+    title: str,
+    path: str | Path | None = None,
+) -> Figure:
+    """Test accuracy against training size, one panel per dataset: ANN and SANN (mean with
+    the 95% interval as a band) and the rules alone (flat: they do not learn). ``curves``
+    maps a dataset name to its ``learning_curve`` entry of the blocks results."""
+    names = list(curves)
+    cols = min(3, len(names))
+    rows = math.ceil(len(names) / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 3 * rows), squeeze=False,
+                             sharex=True)
+    for ax, name in zip(axes.flat, names, strict=False):
+        curve = curves[name]
+        sizes = np.asarray(curve["sizes"], dtype=float)
+        for net, colour in (("ann", ANN_COLOUR), ("sann", SANN_COLOUR)):
+            points = curve[net]
+            mean = np.array([p["mean"] for p in points]) * 100
+            low = np.array([p["ci95"][0] for p in points]) * 100
+            high = np.array([p["ci95"][1] for p in points]) * 100
+            ax.plot(sizes, mean, marker="o", ms=3, color=colour, label=net.upper())
+            ax.fill_between(sizes, low, high, color=colour, alpha=0.2)
+        rules = curve["rules"]
+        ax.axhline(rules["mean"] * 100, color="#444444", ls="--", lw=1, label="rules alone")
+        ax.set_xscale("log")
+        ax.set_title(name, fontsize=9)
+        ax.grid(alpha=0.3)
+    for ax in axes.flat[len(names):]:
+        ax.set_visible(False)
+    for ax in axes[-1]:
+        ax.set_xlabel("training samples")
+    for ax in axes[:, 0]:
+        ax.set_ylabel("test accuracy (%)")
+    axes.flat[0].legend(fontsize=7, loc="lower right")
+    fig.suptitle(title)
+    fig.tight_layout()
     return _save(fig, path)
