@@ -42,3 +42,24 @@ def book_html() -> Path:
             shutil.rmtree(BUILD / "doctrees", ignore_errors=True)
     assert done.returncode == 0, f"the book build failed:\n{done.stdout}\n{done.stderr}"
     return BUILD / "html"
+
+
+CHROMIUM = Path("/usr/bin/chromium")
+CHROMIUM_ARGS = [
+    "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+    "--disable-background-networking", "--disable-component-update", "--disable-sync",
+]
+
+
+@pytest.fixture(scope="session")
+def browser():
+    """Debian's headless Chromium, one per test process: Playwright's sync API runs one
+    event loop per thread, so a second ``sync_playwright()`` beside it would fail."""
+    if not CHROMIUM.exists():
+        pytest.fail("Chromium is missing: `make test` installs it from Debian (apt chromium)")
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as playwright:
+        chromium = playwright.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
+        yield chromium
+        chromium.close()
