@@ -39,6 +39,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from sann.cache import write_atomically
+
 ROOT = Path(__file__).resolve().parents[1]
 #: Folders of the repository whose files are never inputs (build output, VCS, byte code).
 SKIP_PARTS = frozenset({".git", "__pycache__", ".ipynb_checkpoints", "_build", ".venv"})
@@ -202,17 +204,7 @@ def _absolute(name: str) -> Path:
 
 def _write_json(path: Path, data: dict) -> None:
     """Write ``data`` whole or not at all (temporary file + os.replace)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            json.dump(data, fh, indent=1, sort_keys=True)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    write_atomically(path, json.dumps(data, indent=1, sort_keys=True).encode("utf-8"))
 
 
 def record_path(cache_path: Path, hashkey: str) -> Path:

@@ -112,17 +112,24 @@ def save(name: str, key: str, arrays: dict[str, np.ndarray],
     _sweep_stale_tmp(path.parent)
     buf = io.BytesIO()
     np.savez(buf, **arrays, **{_KEY_FIELD: np.array(key)})
+    write_atomically(path, buf.getvalue())
+    return path
+
+
+def write_atomically(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` whole or not at all (a temporary file beside it, fsync,
+    os.replace): a build that fails or is killed midway leaves no half-written entry."""
+    path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
         with os.fdopen(fd, "wb") as fh:
-            fh.write(buf.getvalue())
+            fh.write(data)
             fh.flush()
             os.fsync(fh.fileno())
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
-    return path
 
 
 def get_or_build(name: str, description: dict,

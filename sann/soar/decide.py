@@ -26,6 +26,7 @@ from .preferences import (
     WORST,
     Slot,
 )
+from .rhs import kernel_rand_int
 
 NONE = "none"
 TIE = "tie"
@@ -217,26 +218,13 @@ def choose(slot: Slot, candidates: list[Symbol], exploration: Exploration) -> Sy
     if policy == "last":
         return candidates[-1]
     if policy == "random":
-        return candidates[_kernel_int(rng, len(candidates) - 1)]
+        return candidates[kernel_rand_int(rng, len(candidates) - 1)]
     values = numeric_values(slot, candidates, exploration.numeric_mode)
     if policy == "softmax":
         return _softmax(candidates, values, rng)
     if policy == "boltzmann":
         return _boltzmann(candidates, values, exploration.temperature, rng)
     return _epsilon_greedy(candidates, values, exploration.epsilon, rng)
-
-
-def _kernel_int(rng: random.Random, limit: int) -> int:
-    """The kernel's ``SoarRandInt(limit)`` (MTRand's ``randInt``), an integer in [0, limit]:
-    32-bit draws masked to limit's bit length until one is at most limit. Python's
-    ``randrange`` takes the high bits instead, so it would choose other candidates."""
-    mask = limit
-    for shift in (1, 2, 4, 8, 16):
-        mask |= mask >> shift
-    while True:
-        draw = rng.getrandbits(32) & mask
-        if draw <= limit:
-            return draw
 
 
 def _kernel_real(rng: random.Random) -> float:
@@ -248,7 +236,7 @@ def _softmax(candidates: list[Symbol], values: list[float], rng: random.Random) 
     """The kernel's 'softmax': proportional to the positive numeric values, else uniform."""
     total = sum(v for v in values if v > 0)
     if total <= 0:
-        return candidates[_kernel_int(rng, len(candidates) - 1)]
+        return candidates[kernel_rand_int(rng, len(candidates) - 1)]
     target = _kernel_real(rng) * total
     running = 0.0
     for cand, value in zip(candidates, values, strict=True):
@@ -277,7 +265,7 @@ def _epsilon_greedy(
     candidates: list[Symbol], values: list[float], epsilon: float, rng: random.Random
 ) -> Symbol:
     if _kernel_real(rng) < epsilon:
-        return candidates[_kernel_int(rng, len(candidates) - 1)]
+        return candidates[kernel_rand_int(rng, len(candidates) - 1)]
     top = max(values)
     best = [c for c, v in zip(candidates, values, strict=True) if v == top]
-    return best[_kernel_int(rng, len(best) - 1)] if len(best) > 1 else best[0]
+    return best[kernel_rand_int(rng, len(best) - 1)] if len(best) > 1 else best[0]

@@ -522,11 +522,13 @@ def _rand_int(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
     rng = _rng(ctx)
     if limit <= 0:
         return rng.getrandbits(32)
-    return _rand_up_to(rng, limit & _WORD)
+    return kernel_rand_int(rng, limit & _WORD)
 
 
-def _rand_up_to(rng: random.Random, limit: int) -> int:
-    """MTRand's ``randInt(n)``: draws masked to n's bit length until one is at most n."""
+def kernel_rand_int(rng: random.Random, limit: int) -> int:
+    """MTRand's ``randInt(n)`` (the kernel's ``SoarRandInt``), an integer in [0, n]: 32-bit
+    draws masked to n's bit length until one is at most n. Python's ``randrange`` takes the
+    high bits instead, so it would draw other numbers (and choose other candidates)."""
     mask = limit
     for shift in (1, 2, 4, 8, 16):
         mask |= mask >> shift
