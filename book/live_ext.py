@@ -9,9 +9,9 @@ At build time it
 - installs the pinned Pyodide from the npm registry (``npm ci`` on package-lock.json when
   node_modules is missing or older than the lock), and copies its runtime into ``_static``;
 - packs the engine the page runs from the package's own sources (``sann/soar``,
-  ``sann/live.py``, ``sann/exercises.py``), ``grammars/``, ``rules/`` and the pure-Python
-  dependencies as installed in this environment (lark, mypy_extensions), so the page runs the
-  very code the build ran, offline.
+  ``sann/live.py``, ``sann/exercises.py``) with their data (the grammar, ``sann/rules``) and
+  the pure-Python dependencies as installed in this environment (lark, mypy_extensions), so
+  the page runs the very code the build ran, offline.
 """
 
 from __future__ import annotations
@@ -189,10 +189,12 @@ def engine_files() -> list[tuple[Path, str]]:
     files = [(ROOT / "sann" / "__init__.py", "sann/__init__.py"),
              (ROOT / "sann" / "live.py", "sann/live.py"),
              (ROOT / "sann" / "exercises.py", "sann/exercises.py")]
-    files += [(p, f"sann/soar/{p.name}") for p in sorted((ROOT / "sann" / "soar").glob("*.py"))]
-    files += [(p, f"grammars/{p.name}") for p in sorted((ROOT / "grammars").glob("*.lark"))]
-    rules = ROOT / "rules"
-    files += [(p, f"rules/{p.relative_to(rules).as_posix()}")
+    soar = ROOT / "sann" / "soar"
+    files += [(p, f"sann/soar/{p.relative_to(soar).as_posix()}")
+              for pattern in ("**/*.py", "**/*.lark") for p in sorted(soar.glob(pattern))
+              if "__pycache__" not in p.parts]
+    rules = ROOT / "sann" / "rules"
+    files += [(p, f"sann/rules/{p.relative_to(rules).as_posix()}")
               for p in sorted(rules.glob("**/*.soar"))]
     for name in DEPENDENCIES:
         files += _distribution_files(name)

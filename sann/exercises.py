@@ -11,16 +11,14 @@ from __future__ import annotations
 import io
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import TextIO
 
+from sann import RULES
 from sann.live import put_input
 from sann.soar import Agent, SoarError
+from sann.soar.parsing.parser import parse
 from sann.soar.production import ConjunctiveNegation, Production
 from sann.soar.rhs import FUNCTIONS
-from sann.soar.syntax import parse
-
-RULES = Path(__file__).resolve().parents[1] / "rules"
 
 
 @dataclass(frozen=True)

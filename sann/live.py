@@ -15,9 +15,9 @@ import contextlib
 import io
 import shlex
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
+import sann
 from sann.soar import Agent, SoarError, SoarSyntaxError
 from sann.soar.introspect import preferences_text
 from sann.soar.magic import DEFAULT_LIMIT, ReaderStream, parse_line, soar_cell
@@ -26,8 +26,8 @@ from sann.soar.memory import Identifier
 __all__ = ["Cell", "SoarError", "Stepper", "error_report", "hanoi_rate", "input_tree",
            "put_input", "query", "run_cell", "run_cell_keeping"]
 
-#: Where the rule files are: ``rules/`` beside the package (in the page: the packed copy).
-RULES = Path(__file__).resolve().parents[1] / "rules"
+#: Where the rule files are: the package's (in the page: the packed copy).
+RULES = sann.RULES
 
 #: Most nodes the working-memory graph shows; a larger memory is cut (and says so).
 GRAPH_LIMIT = 160

@@ -11,7 +11,7 @@ choose_engine()  # before the engine's modules: a stale compiled build must not 
 
 from .agent import Agent  # noqa: E402
 from .errors import SoarError, SoarRuntimeError, SoarSemanticError, SoarSyntaxError  # noqa: E402
-from .syntax import parse, parse_production  # noqa: E402
+from .parsing.parser import parse, parse_production  # noqa: E402
 
 __all__ = [
     "Agent",

@@ -194,7 +194,7 @@ class Agent:
         As in the kernel, the first error stops the rest of the text: what precedes the
         item in error is loaded, then the error is raised."""
         from . import commands
-        from .syntax import parse
+        from .parsing.parser import parse
 
         base = Path(file).resolve().parent if not file.startswith("<") else Path.cwd()
         try:
@@ -220,7 +220,7 @@ class Agent:
     @staticmethod
     def _items_before(text: str, file: str, error: SoarError) -> list:
         """The items that parse before the line of ``error`` (empty if none can be found)."""
-        from .syntax import parse
+        from .parsing.parser import parse
 
         line = getattr(error, "line", None)
         location = getattr(error, "location", None)

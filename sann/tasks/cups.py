@@ -42,12 +42,13 @@ from typing import NamedTuple
 
 import numpy as np
 
+from sann import RULES
 from sann.tasks.sml_agent import SmlAgent
 from sann.vision.camera import Camera, default_camera, make_pose
 from sann.vision.detect import MAX_DETECTIONS, DetectConfig, Detection
 
 ENGINES = ("sann", "soar_sml")
-DEFAULT_RULES = Path(__file__).resolve().parents[2] / "rules" / "cups.soar"
+DEFAULT_RULES = RULES / "cups.soar"
 DEFAULT_CAP = 8
 MAX_CUPS = MAX_DETECTIONS
 CUP_NAMES = "ABCDEFGHIJ"

@@ -33,12 +33,13 @@ from typing import NamedTuple
 
 import numpy as np
 
+from sann import RULES
 from sann.tasks.sml_agent import SmlAgent
 
 from .blocks import FEATURE_NAMES, NAMES, SIDES, BlockWorldParams, Scene, features
 
 ENGINES = ("sann", "soar_sml")
-DEFAULT_RULES = Path(__file__).resolve().parents[2] / "rules" / "blocks.soar"
+DEFAULT_RULES = RULES / "blocks.soar"
 DEFAULT_CAP = 8
 DEFAULT_HORIZON = 8
 # Two blocks must overlap in height by more than this to block a finger (observed heights: the

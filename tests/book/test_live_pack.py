@@ -27,13 +27,13 @@ def test_the_archive_runs_the_engine_alone(tmp_path: Path) -> None:
     with zipfile.ZipFile(archive) as packed:
         names = set(packed.namelist())
         packed.extractall(tmp_path / "fs")
-    assert {"sann/live.py", "sann/soar/agent.py", "grammars/soar.lark",
-            "rules/water-jug.soar", "lark/__init__.py", "mypy_extensions.py"} <= names
+    assert {"sann/live.py", "sann/soar/agent.py", "sann/soar/parsing/soar.lark",
+            "sann/rules/water-jug.soar", "lark/__init__.py", "mypy_extensions.py"} <= names
     assert not [n for n in names if n.endswith((".so", ".pyc"))]
     script = (
         "import json, sys; sys.path.insert(0, sys.argv[1]);"
         "import sann.live as live, sann.exercises as ex;"
-        "text = open(sys.argv[1] + '/rules/water-jug.soar').read();"
+        "text = open(sys.argv[1] + '/sann/rules/water-jug.soar').read();"
         "run = live.run_cell({'text': text, 'file': 'water-jug.soar', 'shipped': text});"
         "print(json.dumps([run['halted'], run['stats']['decisions'], live.__file__,"
         " ex.check('greedy-empty', '')['passed']]))"
@@ -49,5 +49,5 @@ def test_the_archive_runs_the_engine_alone(tmp_path: Path) -> None:
 
 def test_the_archive_holds_the_package_sources() -> None:
     files = {name: source for source, name in _live_ext().engine_files()}
-    for name in ("sann/soar/rete.py", "sann/exercises.py", "rules/hanoi.soar"):
+    for name in ("sann/soar/rete.py", "sann/exercises.py", "sann/rules/hanoi.soar"):
         assert files[name] == ROOT / name

@@ -7,6 +7,7 @@ from collections import Counter
 
 import pytest
 
+from sann.soar.parsing.parser import parse, parse_production
 from sann.soar.printer import (
     format_action,
     format_command,
@@ -25,7 +26,6 @@ from sann.soar.production import (
     Production,
     Var,
 )
-from sann.soar.syntax import parse, parse_production
 
 SOURCE = """\
 sp {blocks*propose*move "Move a clear block."

@@ -9,9 +9,9 @@ import pytest
 
 from sann.soar.errors import SoarSemanticError
 from sann.soar.memory import WME, Identifier, IdentifierFactory
+from sann.soar.parsing.parser import parse_production
 from sann.soar.production import Condition, Const, Production, Var
 from sann.soar.rete import BruteForceMatcher, Match, Rete, symbol_order_less
-from sann.soar.syntax import parse_production
 
 MATCHERS = [Rete, BruteForceMatcher]
 

@@ -19,8 +19,9 @@ import pytest
 from sann.soar.agent import Agent
 from sann.soar.errors import SoarRuntimeError, SoarSemanticError
 from sann.soar.memory import Identifier
+from sann.soar.parsing.actions import KNOWN_RHS_FUNCTIONS
+from sann.soar.parsing.parser import parse
 from sann.soar.rhs import FUNCTIONS, SET_COUNT_ERROR, format_value, kernel_random
-from sann.soar.syntax import KNOWN_RHS_FUNCTIONS, parse
 
 
 class Ctx:

@@ -9,6 +9,8 @@ from pathlib import Path
 import pytest
 
 from sann.soar.errors import SoarSemanticError, SoarSyntaxError, SoarWarning
+from sann.soar.parsing.actions import KNOWN_RHS_FUNCTIONS
+from sann.soar.parsing.parser import parse, parse_file, parse_partial, parse_production
 from sann.soar.printer import format_production
 from sann.soar.production import (
     CallAction,
@@ -25,13 +27,6 @@ from sann.soar.production import (
     Var,
 )
 from sann.soar.rhs import FUNCTIONS
-from sann.soar.syntax import (
-    KNOWN_RHS_FUNCTIONS,
-    parse,
-    parse_file,
-    parse_partial,
-    parse_production,
-)
 
 ROOT = Path(__file__).resolve().parents[2]
 S = Var("s")

@@ -14,6 +14,9 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from sann.soar.errors import SoarSemanticError, SoarSyntaxError
+from sann.soar.parsing.actions import KNOWN_RHS_FUNCTIONS
+from sann.soar.parsing.normalise import drop_unbound_relations
+from sann.soar.parsing.parser import parse
 from sann.soar.printer import format_production
 from sann.soar.production import (
     RELATIONS,
@@ -30,7 +33,6 @@ from sann.soar.production import (
     Var,
 )
 from sann.soar.rete import kernel_refusals
-from sann.soar.syntax import KNOWN_RHS_FUNCTIONS, _drop_unbound_relations, parse
 
 ROOT = Path(__file__).resolve().parents[2]
 # Mutations often make a preference land on a non-operator attribute: the kernel's warning.
@@ -238,7 +240,7 @@ def _in_kernel_form(production: Production) -> bool:
         kernel_refusals(production)
     except SoarSemanticError:
         return False
-    kept = _drop_unbound_relations(production.conditions, set(), lambda letter: Var(letter))
+    kept = drop_unbound_relations(production.conditions, set(), lambda letter: Var(letter))
     return kept == production.conditions
 
 

@@ -8,7 +8,7 @@ let ready = null;
 
 const DISPATCH = `
 import json, os, sys
-os.chdir("/home/pyodide/sann-live")  # rule files name each other from there (source ...)
+os.chdir("/home/pyodide/sann-live/sann")  # where rules/ is: rule files name each other from there
 sys.path.insert(0, "/home/pyodide/sann-live")
 import sann.live as live
 
