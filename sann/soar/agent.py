@@ -52,7 +52,9 @@ from .production import (
 )
 from .results import find_results
 from .rete import KernelOrder, _wme_fits, equality_vars, negation_matches, prefix_token
-from .rhs import FUNCTIONS, format_value, kernel_random
+from .rhs import FUNCTIONS
+from .rhs.rand import kernel_random
+from .text import format_value
 from .trace import print_identifier, symbol_text, trace_preference, trace_wme
 
 PHASES = ("input", "propose", "decide", "apply", "output")

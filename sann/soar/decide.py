@@ -26,7 +26,7 @@ from .preferences import (
     WORST,
     Slot,
 )
-from .rhs import kernel_rand_int
+from .rhs.rand import kernel_rand_int
 
 NONE = "none"
 TIE = "tie"

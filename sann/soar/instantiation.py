@@ -22,7 +22,8 @@ from .errors import SoarError, SoarRuntimeError
 from .memory import WME, Identifier, Symbol, rhs_id_hint
 from .preferences import NATIVE, Preference, preference_type
 from .production import CallAction, Const, FuncCall, MakeAction, Production, RhsValue, Var
-from .rhs import FUNCTIONS, kernel_shown
+from .rhs import FUNCTIONS
+from .text import format_symbol as kernel_shown
 
 if TYPE_CHECKING:
     from .goals import Goal

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import re
 
-from sann.soar.memory import format_symbol
 from sann.soar.production import (
     Action,
     CallAction,
@@ -35,43 +34,18 @@ from sann.soar.production import (
     Test,
     Var,
 )
+from sann.soar.text import format_constant
 
 __all__ = [
     "format_action",
     "format_command",
     "format_condition",
-    "format_constant",
     "format_production",
     "format_rhs_value",
     "format_test",
 ]
 
-_KEYWORDS = ("state", "impasse")
 INDENT = "    "
-
-
-def format_constant(value: str | int | float, keyword_safe: bool = False) -> str:
-    """A constant as Soar reads it back: a string as the kernel prints it
-    (`memory.string_needs_bars`), floats always with a decimal point and every digit."""
-    if isinstance(value, bool):
-        raise TypeError(f"Soar has no boolean constants: {value!r}")
-    if isinstance(value, int):
-        return str(value)
-    if isinstance(value, float):
-        return _format_float(value)
-    if keyword_safe and value in _KEYWORDS:
-        return f"|{value}|"
-    return format_symbol(value)
-
-
-def _format_float(value: float) -> str:
-    if value != value or value in (float("inf"), float("-inf")):
-        raise ValueError(f"Soar cannot write the float {value!r}")
-    text = repr(value)
-    if "." not in text:  # 1e+20 -> 1.0e+20: Soar reads a run without '.' as a symbol
-        mantissa, _, exponent = text.partition("e")
-        text = f"{mantissa}.0" + (f"e{exponent}" if exponent else "")
-    return text
 
 
 def format_test(test: Test, keyword_safe: bool = False) -> str:

@@ -15,7 +15,8 @@ from pathlib import Path
 import pytest
 
 from sann.soar.agent import Agent
-from sann.soar.rhs import DEEP_COPY_NOT_ID, FUNCTIONS
+from sann.soar.rhs import FUNCTIONS
+from sann.soar.rhs.deep_copy import DEEP_COPY_NOT_ID
 from sann.soar.trace import trace_wme
 
 # Shared substructure (^y and ^z lead to one identifier) and a cycle (^back), several values

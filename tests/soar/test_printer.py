@@ -12,7 +12,6 @@ from sann.soar.printer import (
     format_action,
     format_command,
     format_condition,
-    format_constant,
     format_production,
 )
 from sann.soar.production import (
@@ -26,6 +25,7 @@ from sann.soar.production import (
     Production,
     Var,
 )
+from sann.soar.text import format_constant
 
 SOURCE = """\
 sp {blocks*propose*move "Move a clear block."

@@ -6,7 +6,8 @@ import pytest
 
 from sann.soar.errors import SoarRuntimeError
 from sann.soar.memory import Identifier
-from sann.soar.rhs import FUNCTIONS, format_value
+from sann.soar.rhs import FUNCTIONS
+from sann.soar.text import format_value
 
 
 class Ctx:

@@ -18,7 +18,9 @@ import pytest
 from sann.soar.agent import Agent
 from sann.soar.errors import SoarRuntimeError, SoarSemanticError
 from sann.soar.memory import Identifier
-from sann.soar.rhs import FUNCTIONS, SET_COUNT_ERROR, SET_NAN, format_value
+from sann.soar.rhs import FUNCTIONS
+from sann.soar.rhs.wm import SET_COUNT_ERROR, SET_NAN
+from sann.soar.text import format_value
 
 
 def call(name: str, *args):

@@ -21,7 +21,10 @@ from sann.soar.errors import SoarRuntimeError, SoarSemanticError
 from sann.soar.memory import Identifier
 from sann.soar.parsing.actions import KNOWN_RHS_FUNCTIONS
 from sann.soar.parsing.parser import parse
-from sann.soar.rhs import FUNCTIONS, SET_COUNT_ERROR, format_value, kernel_random
+from sann.soar.rhs import FUNCTIONS
+from sann.soar.rhs.rand import kernel_random
+from sann.soar.rhs.wm import SET_COUNT_ERROR
+from sann.soar.text import format_value
 
 
 class Ctx:

@@ -44,7 +44,7 @@ class RhsNames(frozenset[str]):
 
 
 #: The right-hand-side functions a production may call when text is parsed without an engine
-#: (a subset of what the agent's rhs.py implements; the agent passes its own).
+#: (a subset of what the agent's `sann.soar.rhs` implements; the agent passes its own).
 KNOWN_RHS_FUNCTIONS: RhsNames = RhsNames(
     {
         "write", "crlf", "halt", "interrupt",
@@ -220,7 +220,6 @@ def _check_binary_preferences(production: Production) -> None:
                 "binary preferences are legal only on ^operator",
                 production.location,
             )
-
 
 
 def _calls(value: object) -> Iterator[FuncCall]:

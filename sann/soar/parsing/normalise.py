@@ -70,7 +70,6 @@ def first_letter(value: object) -> str:
     return "v"
 
 
-
 def negate(elements: list[ConditionElement]) -> list[ConditionElement]:
     """``-`` before a condition or group, as the kernel does it: one condition flips its
     sign (``-(<s> -^a b)`` is positive), one conjunctive negation gives back its conditions
@@ -134,7 +133,6 @@ def _compares_unbound(test: Test, bound: set[str]) -> bool:
     )
 
 
-
 def lhs_bound(elements: tuple[ConditionElement, ...]) -> set[str]:
     """Variables bound by equality tests of the positive conditions of one scope."""
     bound: set[str] = set()
@@ -143,7 +141,6 @@ def lhs_bound(elements: tuple[ConditionElement, ...]) -> set[str]:
             for test in (element.id_test, element.attr_test, element.value_test):
                 bound.update(equality_vars(test))
     return bound
-
 
 
 def fresh_names(temporary: list[str], used: set[str]) -> dict[str, str]:

@@ -408,7 +408,6 @@ class ToDataclasses(Transformer):
         return production
 
 
-
 def _float_text(text: str) -> str:
     """Soar accepts ``1.5e`` and ``2.e+``: an exponent without digits counts as none."""
     return re.sub(r"[eE][+-]?$", "", text)
