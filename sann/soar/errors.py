@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from sann.soar.production import SourceLocation
+
 
 class SoarError(Exception):
     """Base class of every error the engine reports to a user."""
@@ -43,7 +45,9 @@ class SoarSemanticError(SoarError):
     """A production that parses but cannot be loaded (unbound RHS variable, unlinked
     condition, unknown RHS function); the message names the production."""
 
-    def __init__(self, production: str, message: str, location: object | None = None) -> None:
+    def __init__(
+        self, production: str, message: str, location: SourceLocation | None = None
+    ) -> None:
         self.production = production
         self.location = location
         where = f"{location.file}:{location.line}: " if location is not None else ""

@@ -6,7 +6,7 @@ SML changes; identifiers are named at once so that handles can be linked before 
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Union
+from typing import TYPE_CHECKING, Union, cast
 
 from .errors import SoarRuntimeError
 from .memory import WME, Identifier, Symbol
@@ -76,7 +76,7 @@ class InputHandle:
         if kind is str or kind is int or kind is float:  # the common case, checked first
             handle = _new(WMEHandle)  # WMEHandle.__init__, inline (a class call costs a C frame)
             handle._agent, handle.id, handle.attr = agent, self.identifier, attr
-            handle.value, handle.wme, handle.removed = value, None, False
+            handle.value, handle.wme, handle.removed = cast(Symbol, value), None, False
             self._children.append(handle)
             agent._input_ops.append(handle)
             return handle

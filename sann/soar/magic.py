@@ -92,7 +92,7 @@ def soar_cell(line: str, cell: str, namespace: dict[str, Any]) -> Agent:
     elif options.seed is not None:
         agent.srand(options.seed)
     previous = agent.out
-    agent.out = ReaderStream(sys.stdout)
+    agent.out = ReaderStream(sys.stdout)  # type: ignore[assignment]  # Agent.out only writes
     try:
         if options.run:  # before init-soar, which traces the new top state
             agent.trace(options.trace)

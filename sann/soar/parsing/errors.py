@@ -96,7 +96,8 @@ def from_lark(error: UnexpectedInput, text: str, file: str) -> SoarSyntaxError:
             message = f"unterminated string: no closing {token[:1]}"
         return syntax_error(text, file, message, token.line or 1, token.column or 1, expected)
     if isinstance(error, UnexpectedCharacters):
-        char = text[error.pos_in_stream] if error.pos_in_stream < len(text) else ""
+        at = error.pos_in_stream
+        char = text[at] if at is not None and at < len(text) else ""
         expected = _readable(error.allowed or ())
         message = f"unexpected character {char!r}"
         return syntax_error(text, file, message, error.line, error.column, expected)

@@ -21,6 +21,8 @@ from collections.abc import Collection, Iterator
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
+from types import FrameType
+from typing import cast
 
 from lark import Lark, Token
 from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedEOF, UnexpectedToken
@@ -82,7 +84,8 @@ _LOCK = threading.Lock()
 
 def _caller_stacklevel() -> int:
     """The warnings stack level of the first frame outside this module (the user's call)."""
-    frame, level = sys._getframe(1), 1
+    frame: FrameType | None = sys._getframe(1)
+    level = 1
     while frame is not None and frame.f_code.co_filename == __file__:
         frame, level = frame.f_back, level + 1
     return level
@@ -128,7 +131,8 @@ def parse_partial(
             return list(done), None
         transformer.reset(text, file, functions)
         try:
-            items = parser.parse(text)
+            # The inline transformer's `start` makes the result a list, not a tree.
+            items = cast(list[Production | Command], parser.parse(text))
             if not transformer.warnings:  # a file that warns warns again when re-read
                 _remember(key, tuple(items))
             return items, None

@@ -16,6 +16,7 @@ import dataclasses
 import re
 from collections.abc import Collection, Iterator
 from dataclasses import dataclass
+from typing import Literal
 
 from lark import Token, Transformer
 
@@ -54,13 +55,15 @@ from sann.soar.rete import load_warnings
 
 __all__ = ["ToDataclasses"]
 
+GoalKeyword = Literal["state", "impasse"]
+
 
 # ----------------------------------------------------------------- intermediate structures
 
 
 @dataclass(frozen=True)
 class _Goal:
-    keyword: str
+    keyword: GoalKeyword
 
 
 @dataclass(frozen=True)
@@ -146,7 +149,7 @@ class ToDataclasses(Transformer):
 
     def shell_command(self, items: list) -> None:
         name = items[0]
-        raise self._syntax_error(f"'{name}' is refused: {SHELL_REFUSAL}", name.line, name.column)
+        raise self._token_error(name, f"'{name}' is refused: {SHELL_REFUSAL}")
 
     def braced(self, items: list) -> str:
         """A {braced} argument is its text between the braces, verbatim (as in Soar's CLI)."""
@@ -181,7 +184,10 @@ class ToDataclasses(Transformer):
         return Const(value)
 
     def _number_error(self, token: Token, problem: str) -> SoarSyntaxError:
-        return self._syntax_error(f"bad number '{token}': {problem}", token.line, token.column)
+        return self._token_error(token, f"bad number '{token}': {problem}")
+
+    def _token_error(self, token: Token, message: str) -> SoarSyntaxError:
+        return self._syntax_error(message, token.line or 1, token.column or 1)
 
     def relation(self, items: list) -> str:
         return str(items[0])
@@ -199,7 +205,7 @@ class ToDataclasses(Transformer):
     # -- conditions
 
     def goal(self, items: list) -> _Goal:
-        return _Goal(str(items[0]))
+        return _Goal("impasse" if items[0] == "impasse" else "state")  # the grammar's only two
 
     def attr_path(self, items: list) -> tuple[Test, ...]:
         return tuple(items)
@@ -215,16 +221,17 @@ class ToDataclasses(Transformer):
     def conds_for_one_id(self, items: list) -> list[ConditionElement]:
         close = items.pop()
         del items[0]
-        goal = items.pop(0).keyword if items and isinstance(items[0], _Goal) else None
+        goal: GoalKeyword | None = None
+        if items and isinstance(items[0], _Goal):
+            goal = items.pop(0).keyword
         has_id = bool(items) and not isinstance(items[0], _AttrValueTests)
         letter = "i" if goal == "impasse" else "s"
         id_test = items.pop(0) if has_id else self._fresh_variable(letter)
         if goal and not items:
-            raise self._syntax_error(
+            raise self._token_error(
+                close,
                 f"expected an attribute test after '({goal}': add one such as "
                 "'^type state' or '^superstate nil'",
-                close.line,
-                close.column,
             )
         elements: list[ConditionElement] = []
         for avt in items:
@@ -232,7 +239,7 @@ class ToDataclasses(Transformer):
         return elements
 
     def _expand_tests(
-        self, id_test: Test, goal: str | None, avt: _AttrValueTests
+        self, id_test: Test, goal: GoalKeyword | None, avt: _AttrValueTests
     ) -> list[ConditionElement]:
         """One attribute test with its path and values -> conditions (kernel order)."""
         chain: list[Condition] = []
@@ -299,11 +306,9 @@ class ToDataclasses(Transformer):
                     i += 1
             yield value, tuple(prefs) or (("+", None),)
 
-    def _item_error(self, item: object, expected: str) -> SoarSyntaxError:
+    def _item_error(self, item: Token | _Preference, expected: str) -> SoarSyntaxError:
         token = item.token if isinstance(item, _Preference) else item
-        return self._syntax_error(
-            f"unexpected '{token}' in an action: expected {expected}", token.line, token.column
-        )
+        return self._token_error(token, f"unexpected '{token}' in an action: expected {expected}")
 
     def make_action(self, items: list) -> list[Action]:
         ident, *makes = items
@@ -357,11 +362,10 @@ class ToDataclasses(Transformer):
     def production_name(self, items: list) -> Token:
         token = items[0]
         if token.type == "IDLIKE":
-            raise self._syntax_error(
+            raise self._token_error(
+                token,
                 f"production name '{token}' looks like an identifier (a letter and digits); "
                 "Soar refuses it: choose another name",
-                token.line,
-                token.column,
             )
         return token
 

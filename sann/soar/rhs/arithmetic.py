@@ -232,7 +232,9 @@ def _max(ctx: RhsContext, args: Sequence[Symbol]) -> Symbol:
     return _extreme("max", max, args)
 
 
-def _extreme(name: str, pick: Callable[[list], Symbol], args: Sequence[Symbol]) -> Symbol:
+def _extreme(
+    name: str, pick: Callable[[list[int | float]], int | float], args: Sequence[Symbol]
+) -> Symbol:
     """As in the kernel (measured): a float among the arguments makes the result a float,
     ``(max 3 1.5)`` is 3.0; with no argument it is 0."""
     nums = _numbers(name, args)

@@ -120,7 +120,7 @@ class _KernelSlots:
 
     def of(self, ident: Identifier) -> list[WME]:
         agent = self.agent
-        slots: dict[Symbol, list[WME]] = {}
+        slots: dict[object, list[WME]] = {}  # by `_slot_key`
         inputs: list[WME] = []
         is_goal = ident in agent._goals
         for wme in agent._arch.get(ident, ()):

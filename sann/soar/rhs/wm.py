@@ -34,7 +34,7 @@ def slot_index(ctx: RhsContext) -> dict[Identifier, list[WME]]:
     Rule-made WMEs with a goal attribute on a state, or inside the input-link, are left out
     too: our public view of working memory does not tell who made a WME."""
     index: dict[Identifier, list[WME]] = {}
-    io_links: list[Symbol] = []
+    io_links: list[Identifier] = []
     for wme in ctx.wmes():
         ident = wme.id
         if wme.acceptable:
@@ -43,18 +43,21 @@ def slot_index(ctx: RhsContext) -> dict[Identifier, list[WME]]:
             if wme.attr in GOAL_ATTRIBUTES:
                 continue
             if wme.attr == "io" and ident.level == 1:
-                io_links.append(wme.value)
+                if type(wme.value) is Identifier:
+                    io_links.append(wme.value)
                 continue
         index.setdefault(ident, []).append(wme)
-    for ident in _input_side(index, io_links):
-        index.pop(ident, None)
+    for linked in _input_side(index, io_links):
+        index.pop(linked, None)
     return index
 
 
-def _input_side(index: dict[Identifier, list[WME]], io_links: list[Symbol]) -> set[Symbol]:
+def _input_side(
+    index: dict[Identifier, list[WME]], io_links: list[Identifier]
+) -> set[Identifier]:
     """The io identifiers and everything reachable from their input-links."""
     side = set(io_links)
-    todo = [w.value for io in io_links for w in with_attr(index, io, "input-link")]
+    todo: list[Symbol] = [w.value for io in io_links for w in with_attr(index, io, "input-link")]
     while todo:
         ident = todo.pop()
         if type(ident) is Identifier and ident not in side:
