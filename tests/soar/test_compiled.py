@@ -110,3 +110,19 @@ def test_makefile_and_setup_read_the_one_list_of_modules() -> None:
                       for name in compiled.MODULES]
     assert all((ROOT / path).is_file() for path in listed)
     assert compiled.source_file("matching.rete", Path("/x")) == Path("/x/matching/rete.py")
+
+
+def test_a_dotted_module_is_found_in_its_subpackage(tmp_path: Path, monkeypatch) -> None:
+    """A subpackage's module ("parsing.parser") has its source, its extension file and its
+    source-first import where its dotted name says."""
+    monkeypatch.setattr(compiled, "MODULES", ("memory", "parsing.parser"))
+    stem = tmp_path / "parsing" / "parser"
+    stem.parent.mkdir()
+    stem.with_suffix(".py").write_text("")
+    built = stem.with_name("parser" + compiled.importlib.machinery.EXTENSION_SUFFIXES[0])
+    built.write_text("")
+    assert compiled.extension_modules(tmp_path) == [built]
+    spec = compiled._SourceFinder().find_spec("sann.soar.parsing.parser")
+    assert spec is not None and spec.origin == str(compiled.HERE / "parsing" / "parser.py")
+    assert compiled._SourceFinder().find_spec("sann.soar.parser") is None
+    assert compiled._SourceFinder().find_spec("sann.soar.parsing.errors") is None
