@@ -336,7 +336,7 @@ class ToDataclasses(Transformer):
     ) -> tuple[tuple[str, RhsValue | None], ...]:
         """The kernel's rule off ``^operator``: each ``-`` is a reject; every other unary sign
         counts as ``+`` (with a warning), and one acceptable is made only if nothing rejects.
-        Binary preferences stay, for `_check_binary_preferences` to refuse."""
+        Binary preferences stay, for `actions.check_production` to refuse."""
         for op, referent in prefs:
             if referent is None and op not in "+-":
                 self._warnings.append(

@@ -1,6 +1,6 @@
-"""Functions about the run rather than its data: ``halt`` and ``interrupt`` (the agent stops
-after the phase), ``wait``, ``dc`` and ``timestamp`` (its clocks), and ``count``,
-``dont-learn`` and ``force-learn``, which the kernel checks and otherwise ignores here.
+"""Functions about the run rather than its data: ``halt`` and ``interrupt`` (they ask the agent
+to stop), ``wait``, ``dc`` and ``timestamp`` (its clocks), and ``count``, ``dont-learn`` and
+``force-learn``, which the kernel checks and otherwise ignores here.
 """
 
 from __future__ import annotations
