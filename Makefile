@@ -5,7 +5,8 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 BOOK_HTML := book/_build/html/index.html
 # The engine's modules that mypyc compiles (setup.py; sann/soar/compiled.py says which and why).
-ENGINE := $(patsubst %,sann/soar/%.py,memory rete preferences instantiation decide goals agent)
+ENGINE := $(shell python3 -c 'import runpy; c = runpy.run_path("sann/soar/compiled.py"); \
+  print(*(c["source_path"](name, c["HERE"]).relative_to(c["HERE"].parents[1]) for name in c["MODULES"]))')
 COMPILED := sann/soar/_engine.sha256
 
 .PHONY: book test engine lab lint bench clean
@@ -27,9 +28,9 @@ $(STAMP): environment.txt pyproject.toml
 # The compiled engine: about two minutes of gcc, redone when an engine module changes. A failed
 # build leaves no extension module behind (the engine then runs from its sources, slower).
 $(COMPILED): $(STAMP) $(ENGINE) setup.py sann/soar/compiled.py
-	rm -rf build $(COMPILED) sann/soar/*.so
+	rm -rf build $(COMPILED); find sann/soar -name '*.so' -delete
 	$(PY) setup.py --quiet build_ext --inplace > build.log 2>&1 \
-	  || { rm -f sann/soar/*.so; tail -30 build.log; echo "compiling the engine failed (build.log)"; exit 1; }
+	  || { find sann/soar -name '*.so' -delete; tail -30 build.log; echo "compiling the engine failed (build.log)"; exit 1; }
 	rm -rf build build.log
 
 engine: $(COMPILED)
@@ -69,4 +70,5 @@ bench: $(STAMP) $(COMPILED)
 
 # The book's caches: executed chapters (book/_build/.jupyter_cache) and datasets (.sann-cache).
 clean:
-	rm -rf book/_build .sann-cache build build.log $(COMPILED) sann/soar/*.so
+	rm -rf book/_build .sann-cache build build.log $(COMPILED)
+	find sann/soar -name '*.so' -delete

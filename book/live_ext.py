@@ -189,7 +189,9 @@ def engine_files() -> list[tuple[Path, str]]:
     files = [(ROOT / "sann" / "__init__.py", "sann/__init__.py"),
              (ROOT / "sann" / "live.py", "sann/live.py"),
              (ROOT / "sann" / "exercises.py", "sann/exercises.py")]
-    files += [(p, f"sann/soar/{p.name}") for p in sorted((ROOT / "sann" / "soar").glob("*.py"))]
+    soar = ROOT / "sann" / "soar"
+    files += [(p, f"sann/soar/{p.relative_to(soar).as_posix()}")
+              for p in sorted(soar.rglob("*.py"))]
     files += [(p, f"grammars/{p.name}") for p in sorted((ROOT / "grammars").glob("*.lark"))]
     rules = ROOT / "rules"
     files += [(p, f"rules/{p.relative_to(rules).as_posix()}")

@@ -26,18 +26,29 @@ from types import ModuleType
 
 PACKAGE = "sann.soar"
 HERE = Path(__file__).resolve().parent
-#: The modules mypyc compiles: the decision cycle, matching and memory (not the parser, the
-#: printer or the commands, whose speed does not matter, nor the code generator).
-MODULES = ("memory", "rete", "preferences", "instantiation", "decide", "goals", "agent")
+#: The modules mypyc compiles, by name below the package: the decision cycle, matching and
+#: memory (not the parser, the load-time checks, the printer or the commands, whose speed
+#: does not matter, nor the code generator and the kernel's condition order).
+MODULES = ("memory", "preferences", "instantiation", "decide", "goals", "agent",
+           "matching.symbols", "matching.variables", "matching.matches", "matching.oracle",
+           "matching.tokens", "matching.plan", "matching.templates", "matching.alpha",
+           "matching.nodes", "matching.query_ncc", "matching.runs", "matching.production_node",
+           "matching.join_order", "matching.build", "matching.rete", "matching.kernel_prefix",
+           "matching.kernel_order")
 #: The shared library of the compiled modules is ``sann/soar/_engine__mypyc.*.so``.
 GROUP = f"{PACKAGE}._engine"
 MANIFEST = HERE / "_engine.sha256"
 
 
+def source_path(name: str, directory: Path = HERE) -> Path:
+    """The source file of the compiled module ``name`` (``matching.rete``: matching/rete.py)."""
+    return directory / f"{name.replace('.', '/')}.py"
+
+
 def source_hashes(directory: Path = HERE) -> dict[str, str]:
     """SHA-256 of each compiled module's source, by module name."""
     return {
-        name: hashlib.sha256((directory / f"{name}.py").read_bytes()).hexdigest()
+        name: hashlib.sha256(source_path(name, directory).read_bytes()).hexdigest()
         for name in MODULES
     }
 
@@ -45,7 +56,8 @@ def source_hashes(directory: Path = HERE) -> dict[str, str]:
 def write_manifest(hashes: dict[str, str], path: Path = MANIFEST) -> None:
     """Record the hashes of the sources just compiled (written whole or not at all)."""
     partial = path.with_suffix(".partial")
-    partial.write_text("".join(f"{digest}  {name}.py\n" for name, digest in hashes.items()))
+    partial.write_text("".join(f"{digest}  {name.replace('.', '/')}.py\n"
+                               for name, digest in hashes.items()))
     partial.replace(path)
 
 
@@ -56,15 +68,16 @@ def read_manifest(path: Path = MANIFEST) -> dict[str, str]:
     hashes = {}
     for line in path.read_text().splitlines():
         digest, _, filename = line.partition("  ")
-        hashes[filename.removesuffix(".py")] = digest
+        hashes[filename.removesuffix(".py").replace("/", ".")] = digest
     return hashes
 
 
 def extension_modules(directory: Path = HERE) -> list[Path]:
     """The compiled modules' extension files present beside the sources."""
     suffixes = importlib.machinery.EXTENSION_SUFFIXES
-    return [directory / f"{name}{suffix}" for name in MODULES for suffix in suffixes
-            if (directory / f"{name}{suffix}").exists()]
+    stems = [source_path(name, directory).with_suffix("") for name in MODULES]
+    return [stem.with_name(stem.name + suffix) for stem in stems for suffix in suffixes
+            if stem.with_name(stem.name + suffix).exists()]
 
 
 def stale_modules(directory: Path = HERE, manifest: Path = MANIFEST) -> list[str]:
@@ -79,10 +92,10 @@ class _SourceFinder:
 
     def find_spec(self, fullname: str, path: Sequence[str] | None = None,
                   target: ModuleType | None = None) -> importlib.machinery.ModuleSpec | None:
-        package, _, name = fullname.rpartition(".")
-        if package != PACKAGE or name not in MODULES:
+        name = fullname.removeprefix(f"{PACKAGE}.")
+        if name == fullname or name not in MODULES:
             return None
-        return importlib.util.spec_from_file_location(fullname, HERE / f"{name}.py")
+        return importlib.util.spec_from_file_location(fullname, source_path(name))
 
 
 def choose_engine() -> None:
@@ -93,7 +106,8 @@ def choose_engine() -> None:
     if os.environ.get("SANN_INTERPRETED", "") not in ("", "0"):
         reason = None
     elif stale := stale_modules():
-        reason = (f"the compiled engine is older than {', '.join(f'{n}.py' for n in stale)}: "
+        reason = (f"the compiled engine is older than "
+                  f"{', '.join(source_path(n, Path()).as_posix() for n in stale)}: "
                   "running the sources instead (slower); `make` recompiles it")
     else:
         return

@@ -62,6 +62,8 @@ from lark.exceptions import (
 )
 
 from sann.soar.errors import SoarSemanticError, SoarSyntaxError, SoarWarning
+from sann.soar.matching.variables import equality_vars
+from sann.soar.parsing.checks import kernel_refusals, load_warnings
 from sann.soar.printer import format_action, format_rhs_value
 from sann.soar.production import (
     Action,
@@ -82,7 +84,6 @@ from sann.soar.production import (
     Test,
     Var,
 )
-from sann.soar.rete import equality_vars, kernel_refusals, load_warnings
 
 __all__ = [
     "GRAMMAR_PATH",

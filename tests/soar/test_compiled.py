@@ -27,7 +27,9 @@ def _python(code: str, cwd: Path = ROOT, **env: str) -> subprocess.CompletedProc
 
 def _fake_tree(tmp_path: Path) -> Path:
     for name in compiled.MODULES:
-        (tmp_path / f"{name}.py").write_text(f"NAME = {name!r}\n")
+        path = compiled.source_path(name, tmp_path)
+        path.parent.mkdir(exist_ok=True)
+        path.write_text(f"NAME = {name!r}\n")
     return tmp_path
 
 
@@ -38,8 +40,8 @@ def test_manifest_round_trip_and_stale_sources(tmp_path: Path) -> None:
     compiled.write_manifest(compiled.source_hashes(tree), manifest)
     assert compiled.read_manifest(manifest) == compiled.source_hashes(tree)
     assert compiled.stale_modules(tree, manifest) == []
-    (tree / "rete.py").write_text("NAME = 'edited'\n")
-    assert compiled.stale_modules(tree, manifest) == ["rete"]
+    compiled.source_path("matching.rete", tree).write_text("NAME = 'edited'\n")
+    assert compiled.stale_modules(tree, manifest) == ["matching.rete"]
     assert not list(tree.glob("*.partial"))
 
 
@@ -55,7 +57,7 @@ def test_make_test_runs_the_compiled_engine() -> None:
 
 @pytest.mark.skipif(not BUILT, reason="no compiled engine here")
 def test_interpreted_on_request() -> None:
-    code = ("from sann.soar import compiled, agent, rete; "
+    code = ("from sann.soar import compiled, agent; from sann.soar.matching import rete; "
             "print(compiled.is_compiled(), agent.__file__.endswith('.py'), "
             "rete.__file__.endswith('.py'))")
     run = _python(code, SANN_INTERPRETED="1")

@@ -14,6 +14,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from sann.soar.errors import SoarSemanticError, SoarSyntaxError
+from sann.soar.parsing.checks import kernel_refusals
 from sann.soar.printer import format_production
 from sann.soar.production import (
     RELATIONS,
@@ -29,7 +30,6 @@ from sann.soar.production import (
     Relational,
     Var,
 )
-from sann.soar.rete import kernel_refusals
 from sann.soar.syntax import KNOWN_RHS_FUNCTIONS, _drop_unbound_relations, parse
 
 ROOT = Path(__file__).resolve().parents[2]
