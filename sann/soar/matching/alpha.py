@@ -11,9 +11,9 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, Protocol
 
-from sann.soar.codegen import define
+from sann.soar.codegen import define, plain
 from sann.soar.matching.plan import Plan
-from sann.soar.matching.templates import compile_alpha, filing_lines, key_lines
+from sann.soar.matching.templates import compile_alpha, filing_lines, unfiling_lines
 from sann.soar.matching.tokens import (
     ALPHA_CACHE_LIMIT,
     ANY,
@@ -21,6 +21,7 @@ from sann.soar.matching.tokens import (
     GET,
     compile_first,
     index_add,
+    index_remove,
 )
 from sann.soar.memory import WME, Identifier
 
@@ -98,25 +99,51 @@ class AlphaMemory:
         """Generate ``on_add`` and ``on_remove`` as straight-line code: store the WME in the
         memory and its indices, then right-activate each successor whose parent memory is
         not empty and tell the listening query nodes that have owners.  Every WME added to
-        working memory passes here once per alpha memory it enters, and the generated code
-        costs half the interpreted loops over indices, successors and listeners."""
-        namespace: dict[str, object] = {"FLOAT": FLOAT, "W": self.wmes}
-        add = ["def on_add(wme):", "    W[wme] = None"]
-        remove = ["def on_remove(wme):", "    del W[wme]"]
-        for k, (field, index) in enumerate(self.indexes.items()):
-            namespace[f"I{k}"] = index
-            add += filing_lines(f"I{k}", f"wme.{field}", "wme", "    ", field != "id")
-            remove += key_lines(f"wme.{field}", "    ", field != "id") + [
-                f"    b = I{k}[key]", "    del b[wme]", f"    if not b: del I{k}[key]"]
+        working memory passes here once per alpha memory it enters, so the loops over
+        indices, successors and listeners are unrolled into the code once, not run for
+        each WME.  ``plain_on_add`` and ``plain_on_remove`` are the loops."""
+        if plain():
+            self.on_add = self.plain_on_add  # type: ignore[method-assign]
+            self.on_remove = self.plain_on_remove  # type: ignore[method-assign]
+            return
+        namespace: dict[str, object] = {"FLOAT": FLOAT, "wmes": self.wmes}
+        add = ["def on_add(wme):", "    wmes[wme] = None"]
+        remove = ["def on_remove(wme):", "    del wmes[wme]"]
+        for field, index in self.indexes.items():
+            namespace[f"index_{field}"] = index
+            add += filing_lines(f"index_{field}", f"wme.{field}", "wme", "    ", field != "id")
+            remove += unfiling_lines(f"index_{field}", f"wme.{field}", "wme", "    ",
+                                     field != "id")
         for k, (activate, parent_tokens) in enumerate(self.activations):
-            namespace[f"P{k}"], namespace[f"R{k}"] = parent_tokens, activate
-            add.append(f"    if P{k}: R{k}(wme)")
+            namespace[f"parent_tokens_{k}"] = parent_tokens
+            namespace[f"right_activate_{k}"] = activate
+            add.append(f"    if parent_tokens_{k}: right_activate_{k}(wme)")
         for k, (node, level) in enumerate(self.listeners):
             # the node's inner_added, read at each call: it is regenerated with the node
-            namespace[f"O{k}"], namespace[f"L{k}"] = node.owners, node
-            add.append(f"    if O{k}: L{k}.inner_added({level}, wme)")
-        self.on_add = define(add, namespace, "on_add")  # type: ignore[method-assign]
-        self.on_remove = define(remove, dict(namespace), "on_remove")  # type: ignore[method-assign]
+            namespace[f"owners_{k}"], namespace[f"listener_{k}"] = node.owners, node
+            add.append(f"    if owners_{k}: listener_{k}.inner_added({level}, wme)")
+        self.on_add = define(  # type: ignore[method-assign]
+            add, namespace, "on_add", "rete:alpha-memory")
+        self.on_remove = define(  # type: ignore[method-assign]
+            remove, dict(namespace), "on_remove", "rete:alpha-memory")
+
+    def plain_on_add(self, wme: WME) -> None:
+        """Plain Python: what the generated ``on_add`` does."""
+        self.wmes[wme] = None
+        for field, index in self.indexes.items():
+            index_add(index, GET[field](wme), wme)
+        for activate, parent_tokens in self.activations:
+            if parent_tokens:
+                activate(wme)
+        for node, level in self.listeners:
+            if node.owners:
+                node.inner_added(level, wme)
+
+    def plain_on_remove(self, wme: WME) -> None:
+        """Plain Python: what the generated ``on_remove`` does."""
+        del self.wmes[wme]
+        for field, index in self.indexes.items():
+            index_remove(index, GET[field](wme), wme)
 
     def index(self, field: str) -> dict:
         index = self.indexes.get(field)

@@ -23,8 +23,9 @@ from sann.soar.matching.nodes import (
     delete_tokens,
 )
 from sann.soar.matching.plan import Plan, plan_condition
+from sann.soar.matching.query import InnerCondition
 from sann.soar.matching.query_ncc import QueryNCCNode
-from sann.soar.matching.runs import RunNode, joins_within
+from sann.soar.matching.runs import Member, RunNode, joins_within
 from sann.soar.matching.templates import compile_check, extender
 from sann.soar.matching.tokens import GET
 from sann.soar.matching.variables import bound_by, equality_vars
@@ -119,8 +120,8 @@ class Builder:
         node = parent.child_map.get(key)
         if node is not None:
             return node
-        members = [(amem, amem.index(plan.index[1]), plan.index[0], GET[plan.index[1]],
-                    compile_check(plan.beta), tuple(plan.new_fields))
+        members = [Member(amem, amem.index(plan.index[1]), plan.index[0], GET[plan.index[1]],
+                          compile_check(plan.beta), tuple(plan.new_fields))
                    for _, plan, amem in run]  # type: ignore[index]
         node = RunNode(self.registry, parent, key, members)
         parent.children.append(node)
@@ -175,7 +176,7 @@ class Builder:
         query (see :class:`QueryNCCNode`)."""
         order = join_order(ncc.conditions, var_pos, scope, singletons, self.volatile)
         deferred: list[tuple[int, str, str]] = []
-        levels: list[tuple] = []
+        levels: list[InnerCondition] = []
         shape: list[tuple] = []
         amems: list[AlphaMemory] = []
         owner_tests: list[list[tuple[Callable, int]]] = []
@@ -197,8 +198,9 @@ class Builder:
                 [] if plan.index is None else [(plan.index[1], plan.index[0])])
             equalities += [(left[1], right[1]) for left, op, right in plan.beta
                            if op == "=" and left[0] == "w" and right[0] == "v"]
-            levels.append((amem.wmes, hashed, pos, getter, compile_check(plan.beta),
-                           fields, negated, tuple(equalities)))
+            levels.append(InnerCondition(amem.wmes, hashed, pos, getter,
+                                         compile_check(plan.beta), fields, negated,
+                                         tuple(equalities)))
             owner_tests.append([(GET[field], p) for field, p in equalities if p < width])
             shape.append((id(amem), plan.index, tuple(plan.beta), fields, negated))
             amems.append(amem)

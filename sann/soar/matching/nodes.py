@@ -9,13 +9,15 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from sann.soar.codegen import define
+from sann.soar.codegen import define, plain
 from sann.soar.matching.alpha import AlphaMemory
 from sann.soar.matching.templates import (
     CHECK_NAMES,
     EXTEND_VALUE,
+    adopt_lines,
     check_lines,
     filing_lines,
+    index_of,
     token_lines,
 )
 from sann.soar.matching.tokens import (
@@ -114,7 +116,8 @@ class JoinNode(Node):
     node as straight-line code (its test, what a new token binds and the indices on its
     tokens are fixed when it is compiled).  They are compiled on first use, and again after
     an index is added to the node's memory; the alpha memory then picks up the new
-    ``right_activate``."""
+    ``right_activate``.  ``plain_left_activate`` and ``plain_right_activate`` do the same
+    in plain Python (``codegen.plain()``)."""
 
     __slots__ = ("amem", "pos", "field", "check", "extend", "left_activate",
                  "right_activate")
@@ -143,49 +146,101 @@ class JoinNode(Node):
         return index
 
     def _compile(self) -> None:
+        if plain():
+            self.left_activate = self.plain_left_activate
+            self.right_activate = self.plain_right_activate
+            self.amem._relink()
+            return
         hashed = self.pos >= 0
         namespace: dict[str, object] = {
-            **CHECK_NAMES, "FLOAT": FLOAT, "Tok": Token, "N": self,
-            "E": self.extend, "R": self.registry, "T": self.tokens, "CH": self.children,
-            "AB": self.amem.indexes[self.field] if hashed else self.amem.wmes,
-            "PB": self.parent.indexes[self.pos] if hashed else self.parent.tokens,  # type: ignore[union-attr]
-        }
-        grow = ("vals" if self.extend is None else "vals + (wme.value,)"
-                if self.extend is EXTEND_VALUE else "E(vals, wme)")
-
-        left = ["def left_activate(t):", "    vals = t.vals"]
+            **CHECK_NAMES, "FLOAT": FLOAT, "Token": Token, "node": self,
+            "extend": self.extend, "wme_records": self.registry, "tokens": self.tokens,
+            "children": self.children}
         if hashed:
-            left += [f"    key = vals[{self.pos}]",
+            namespace["alpha_index"] = self.amem.indexes[self.field]
+            namespace["parent_index"] = self.parent.indexes[self.pos]  # type: ignore[union-attr]
+        else:
+            namespace["alpha_wmes"] = self.amem.wmes
+            namespace["parent_tokens"] = self.parent.tokens  # type: ignore[union-attr]
+        grow = ("values" if self.extend is None else "values + (wme.value,)"
+                if self.extend is EXTEND_VALUE else "extend(values, wme)")
+
+        left = ["def left_activate(parent):", "    values = parent.vals"]
+        if hashed:
+            left += [f"    key = values[{self.pos}]",
                      "    if key.__class__ is float: key = (FLOAT, key)",
-                     "    bucket = AB.get(key)", "    if bucket is None: return"]
-        left += [f"    for wme in {'bucket' if hashed else 'AB'}:"] + join_body(
-            self, namespace, grow, "R[wme][1][tok] = None")
+                     "    bucket = alpha_index.get(key)", "    if bucket is None: return"]
+        left += [f"    for wme in {'bucket' if hashed else 'alpha_wmes'}:"] + join_body(
+            self, namespace, grow, "wme_records[wme][1][token] = None")
         right = ["def right_activate(wme):"]
         if hashed:
             right.append(f"    key = wme.{self.field}")
             if self.field != "id":  # identifiers are never floats
                 right.append("    if key.__class__ is float: key = (FLOAT, key)")
-            right += ["    bucket = PB.get(key)", "    if bucket is None: return"]
-        right += ["    built = R[wme][1]", f"    for t in {'bucket' if hashed else 'PB'}:",
-                  "        vals = t.vals"] + join_body(self, namespace, grow, "built[tok] = None")
-        self.left_activate = define(left, namespace, "left_activate")
-        self.right_activate = define(right, namespace, "right_activate")
+            right += ["    bucket = parent_index.get(key)", "    if bucket is None: return"]
+        right += ["    built = wme_records[wme][1]",
+                  f"    for parent in {'bucket' if hashed else 'parent_tokens'}:",
+                  "        values = parent.vals"] + join_body(
+            self, namespace, grow, "built[token] = None")
+        self.left_activate = define(left, namespace, "left_activate", "rete:join")
+        self.right_activate = define(right, namespace, "right_activate", "rete:join")
         self.amem._relink()  # the alpha memory calls the compiled right_activate from now on
+
+    def plain_left_activate(self, parent: Token) -> None:
+        """Plain Python: a new parent token joins each WME of the alpha memory it fits."""
+        values = parent.vals
+        if self.pos >= 0:
+            bucket = index_of(self.amem.indexes[self.field], values[self.pos])
+            if bucket is None:
+                return
+        else:
+            bucket = self.amem.wmes
+        for wme in bucket:  # type: ignore[attr-defined]
+            self._plain_join(parent, values, wme, self.registry[wme][1])
+
+    def plain_right_activate(self, wme: WME) -> None:
+        """Plain Python: a new WME joins each parent token it fits."""
+        if self.pos >= 0:
+            bucket = index_of(self.parent.indexes[self.pos],  # type: ignore[union-attr]
+                              getattr(wme, self.field))
+            if bucket is None:
+                return
+        else:
+            bucket = self.parent.tokens  # type: ignore[union-attr]
+        built = self.registry[wme][1]
+        for parent in bucket:  # type: ignore[attr-defined]
+            self._plain_join(parent, parent.vals, wme, built)
+
+    def _plain_join(self, parent: Token, values: tuple, wme: WME, built: dict) -> None:
+        """Test the pair, make the token, register it with its WME (``built``), store it in
+        the memory and its indices and pass it on (``join_body``)."""
+        check = self.check
+        if check is not None and not check(values, wme):
+            return
+        extend = self.extend
+        extended = values if extend is None else extend(values, wme)
+        token = new_token(parent, wme, extended, self)
+        adopt(parent, token)
+        built[token] = None
+        self.tokens[token] = None
+        for pos, index in self.index_list:
+            index_add(index, extended[pos], token)
+        for child in self.children:
+            child.left_activate(token)
 
 
 def join_body(node: JoinNode, namespace: dict[str, object], grow: str,
-               register: str) -> list[str]:
+              register: str) -> list[str]:
     """Test the pair, make the token, register, index and pass it on (a function of its
     own, not nested in ``JoinNode._compile``: mypyc fails on a closure there)."""
     lines = [] if node.check is None else check_lines(
-        node.check.specs, "vals", "wme", "continue", "")  # type: ignore[attr-defined]
-    lines += [f"new = {grow}", *token_lines("", "t", "wme", "new"), "s = t.children",
-              "if s is None: t.children = {tok: None}", "else: s[tok] = None", register,
-              "T[tok] = None"]
+        node.check.specs, "values", "wme", "continue", "")  # type: ignore[attr-defined]
+    lines += [f"extended = {grow}", *token_lines("", "parent", "wme", "extended"),
+              *adopt_lines("", "parent"), register, "tokens[token] = None"]
     for k, (pos, index) in enumerate(node.index_list):
-        namespace[f"I{k}"] = index
-        lines += filing_lines(f"I{k}", f"new[{pos}]", "tok", "", True)
-    lines += ["for child in CH:", "    child.left_activate(tok)"]
+        namespace[f"token_index_{k}"] = index
+        lines += filing_lines(f"token_index_{k}", f"extended[{pos}]", "token", "", True)
+    lines += ["for child in children:", "    child.left_activate(token)"]
     return ["        " + line for line in lines]
 
 

@@ -198,7 +198,7 @@ class Rete:
         for amem in info[0]:
             if amem.listeners:
                 for node, k in amem.listeners:
-                    if node.owners and node.levels[k][6]:
+                    if node.owners and node.levels[k].negated:
                         node.inner_removed(k, wme)
 
     def clear_wmes(self) -> None:

@@ -1,28 +1,48 @@
-"""Lines of generated code shared by the nodes' generated activations.
+"""Lines of generated code shared by the nodes' generated activations, and the plain Python
+functions that do the same.
 
-Each helper returns source lines (indented by ``pad``) that do what a named Python helper
-does (``token_lines`` is ``new_token``, ``filing_lines`` is ``index_add``...), written out so
-that the generated loops call no function per token.  The names the lines read (``FLOAT``,
-``Tok``, ``N``...) are put in the namespace the code runs in by the node that generates it.
+Each ``*_lines`` helper returns source lines (indented by ``pad``) that do what a named
+Python helper does (``token_lines`` is ``new_token``, ``filing_lines`` is ``index_add``...),
+written out so that the generated loops call no function per token.  The names the lines
+read (``FLOAT``, ``Token``, ``node``...) are put in the namespace the code runs in by the
+node that generates it.  The constant tests of an alpha memory and the beta tests of a
+join are generated functions too (``compile_alpha``, ``compile_check``), or their plain
+twins (``alpha_tests_hold``, ``beta_tests_hold``) when ``codegen.plain()``.
 """
 
 from __future__ import annotations
 
+import operator
 from collections.abc import Callable, Sequence
+from functools import partial
 
-from sann.soar.codegen import define
+from sann.soar.codegen import define, plain
 from sann.soar.matching.plan import BetaSpec
-from sann.soar.matching.symbols import RELATIONS
+from sann.soar.matching.symbols import RELATIONS, same_symbol
+from sann.soar.matching.tokens import hash_key
 from sann.soar.memory import WME
 
+NUMBERS = frozenset((int, float))
+_ORDER_OPS: dict[str, Callable[[object, object], bool]] = {
+    "<": operator.lt, ">": operator.gt, "<=": operator.le, ">=": operator.ge}
+_TYPES = {"int": int, "float": float}
+#: The names the inlined beta tests read.
+CHECK_NAMES: dict[str, object] = {"NUMBERS": NUMBERS, "RELATIONS": RELATIONS}
 
-def token_lines(pad: str, parent: str, wme: str, vals: str) -> list[str]:
-    """Generated code: ``tok`` = a new token of node ``N`` (``Tok`` in the namespace), what
+
+def token_lines(pad: str, parent: str, wme: str, values: str) -> list[str]:
+    """Generated code: ``token`` = a new token of ``node`` (``Token`` in the namespace), what
     ``new_token`` does, inline."""
-    return [f"{pad}tok = Tok(); tok.parent = {parent}; tok.wme = {wme}; tok.vals = {vals}",
-            f"{pad}tok.node = N; tok.children = tok.extra = None"]
+    return [f"{pad}token = Token(); token.parent = {parent}; token.wme = {wme}; "
+            f"token.vals = {values}",
+            f"{pad}token.node = node; token.children = token.extra = None"]
 
 
+def adopt_lines(pad: str, parent: str) -> list[str]:
+    """Generated code: ``token`` becomes a child of ``parent`` (what ``adopt`` does)."""
+    return [f"{pad}siblings = {parent}.children",
+            f"{pad}if siblings is None: {parent}.children = {{token: None}}",
+            f"{pad}else: siblings[token] = None"]
 
 
 def key_lines(value: str, pad: str, floats: bool) -> list[str]:
@@ -38,118 +58,187 @@ def filing_lines(index: str, value: str, item: str, pad: str, floats: bool) -> l
     """Generated code: file ``item`` under ``value`` in the hash index ``index`` (what
     ``index_add`` does, inline)."""
     return key_lines(value, pad, floats) + [
-        f"{pad}b = {index}.get(key)", f"{pad}if b is None: {index}[key] = {{{item}: None}}",
-        f"{pad}else: b[{item}] = None"]
+        f"{pad}filed = {index}.get(key)",
+        f"{pad}if filed is None: {index}[key] = {{{item}: None}}",
+        f"{pad}else: filed[{item}] = None"]
 
 
+def unfiling_lines(index: str, value: str, item: str, pad: str, floats: bool) -> list[str]:
+    """Generated code: take ``item`` out of the hash index ``index`` (what ``index_remove``
+    does, inline)."""
+    return key_lines(value, pad, floats) + [
+        f"{pad}filed = {index}[key]", f"{pad}del filed[{item}]",
+        f"{pad}if not filed: del {index}[key]"]
 
 
 def bucket_lines(k: int, pad: str, key: str | None, seeded: bool) -> list[str]:
-    """Generated code: ``b<k>`` = the WMEs of condition ``k`` hashed on the value ``key``
-    (an expression; its alpha memory ``W<k>`` when None), or just the seed WME when it
-    fits."""
+    """Generated code: ``candidates_<k>`` = the WMEs of condition ``k`` hashed on the value
+    ``key`` (an expression; all of its alpha memory ``alpha_wmes_<k>`` when None), or just
+    the seed WME when it fits."""
     if seeded:  # same_symbol(key, the seed's field), inline
-        test = (f"(x := {key}).__class__ is (y := G{k}(seed)).__class__ and x == y"
-                if key is not None else "True")
-        return [f"{pad}b{k} = (seed,) if {test} else ()"]
+        test = (f"(bound := {key}).__class__ is (seeded := get_field_{k}(seed)).__class__ "
+                "and bound == seeded" if key is not None else "True")
+        return [f"{pad}candidates_{k} = (seed,) if {test} else ()"]
     if key is None:
-        return [f"{pad}b{k} = W{k}"]
+        return [f"{pad}candidates_{k} = alpha_wmes_{k}"]
     return [f"{pad}key = {key}", f"{pad}if key.__class__ is float: key = (FLOAT, key)",
-            f"{pad}b{k} = I{k}.get(key, ())"]
+            f"{pad}candidates_{k} = alpha_index_{k}.get(key, ())"]
 
 
 def witness_lines(pad: str) -> list[str]:
-    """Generated code: keep ``found`` as the witness of the blocked ``tok`` (what
-    ``QueryNCCNode._witness`` does, inline; ``R`` is the Rete's WME records)."""
-    return [f"{pad}tok.extra = found", f"{pad}for w in found[1]:", f"{pad}    record = R[w]",
-            f"{pad}    s = record[3]", f"{pad}    if s is None: record[3] = {{tok: None}}",
-            f"{pad}    else: s[tok] = None"]
+    """Generated code: keep ``found`` as the witness of the blocked ``token`` (what
+    ``QueryNCCNode._witness`` does, inline; ``wme_records`` is the Rete's WME records)."""
+    return [f"{pad}token.extra = found", f"{pad}for witness in found[1]:",
+            f"{pad}    record = wme_records[witness]", f"{pad}    witnessed = record[3]",
+            f"{pad}    if witnessed is None: record[3] = {{token: None}}",
+            f"{pad}    else: witnessed[token] = None"]
 
 
 def compile_alpha(specs: list[tuple]) -> Callable[[WME], bool] | None:
-    """One generated function for a condition's constant tests (as for the join tests)."""
+    """One function for a condition's constant tests: generated, or ``alpha_tests_hold``."""
     if not specs:
         return None
-    lines = ["def accept(w):"]
+    if plain():
+        return partial(alpha_tests_hold, tuple(specs))
+    lines = ["def accept(wme):"]
     namespace: dict[str, object] = {"NUMBERS": NUMBERS}
     for n, spec in enumerate(specs):
         kind = spec[0]
         if kind == "state":
-            lines.append("    if w.id.level is None: return False")
+            lines.append("    if wme.id.level is None: return False")
             continue
         if kind == "never":
             lines.append("    return False")
             continue
-        lines.append(f"    x = w.{spec[1]}")
+        lines.append(f"    value = wme.{spec[1]}")
         if kind == "type":
-            lines.append(f"    if x.__class__ is not {spec[2]}: return False")
+            lines.append(f"    if value.__class__ is not {spec[2]}: return False")
         elif kind == "eq":
-            namespace[f"c{n}"] = spec[2][1]
-            lines.append(f"    if not (x.__class__ is c{n}.__class__ and x == c{n}): return False")
+            namespace[f"constant_{n}"] = spec[2][1]
+            lines.append(f"    if not (value.__class__ is constant_{n}.__class__ "
+                         f"and value == constant_{n}): return False")
         elif kind == "rel":
-            namespace[f"c{n}"] = spec[3][1]
-            namespace[f"r{n}"] = RELATIONS[spec[2]]
-            lines.append(f"    if not r{n}(x, c{n}): return False")
+            namespace[f"constant_{n}"] = spec[3][1]
+            namespace[f"relation_{n}"] = RELATIONS[spec[2]]
+            lines.append(f"    if not relation_{n}(value, constant_{n}): return False")
         else:  # disjunction of typed constants
-            namespace[f"d{n}"] = frozenset(spec[2])
-            lines.append(f"    if (x.__class__.__name__, x) not in d{n}: return False")
+            namespace[f"choices_{n}"] = frozenset(spec[2])
+            lines.append(f"    if (value.__class__.__name__, value) not in choices_{n}: "
+                         "return False")
     lines.append("    return True")
-    return define(lines, namespace, "accept")
+    return define(lines, namespace, "accept", "rete:alpha-tests")
 
 
-NUMBERS = frozenset((int, float))
-_ORDER_OPS = {"<": "<", ">": ">", "<=": "<=", ">=": ">="}
-CHECK_NAMES: dict[str, object] = {"NUMBERS": NUMBERS, "RELATIONS": RELATIONS}
+def alpha_tests_hold(specs: tuple, wme: WME) -> bool:
+    """Plain Python: whether ``wme`` passes a condition's constant tests (``compile_alpha``)."""
+    for spec in specs:
+        kind = spec[0]
+        if kind == "state":
+            if wme.id.level is None:  # type: ignore[union-attr]
+                return False
+            continue
+        if kind == "never":
+            return False
+        value = getattr(wme, spec[1])
+        if kind == "type":
+            if value.__class__ is not _TYPES[spec[2]]:
+                return False
+        elif kind == "eq":
+            if not same_symbol(value, spec[2][1]):
+                return False
+        elif kind == "rel":
+            if not RELATIONS[spec[2]](value, spec[3][1]):
+                return False
+        elif (value.__class__.__name__, value) not in frozenset(spec[2]):
+            return False
+    return True
 
 
-def check_lines(specs: Sequence[BetaSpec], vals: str, w: str, fail: str, pad: str,
-                 value: Callable[[int], str] | None = None) -> list[str]:
-    """Generated code testing every beta test of a join on the values ``vals`` and the WME
-    ``w``, running ``fail`` (``return False``, ``continue``) at the first that does not
+def check_lines(specs: Sequence[BetaSpec], values: str, wme: str, fail: str, pad: str,
+                value: Callable[[int], str] | None = None) -> list[str]:
+    """Generated code testing every beta test of a join on the values ``values`` and the WME
+    ``wme``, running ``fail`` (``return False``, ``continue``) at the first that does not
     hold.  The join and query loops inline these lines: in the innermost loop a call per
     pair costs more than the tests themselves.  ``value(pos)`` may name a value position
-    otherwise than ``vals[pos]``."""
+    otherwise than ``values[pos]``."""
     if value is None:
-        value = f"{vals}[{{}}]".format  # not a nested def: mypyc fails on one rebinding a parameter
+        # not a nested def: mypyc fails on one rebinding a parameter
+        value = f"{values}[{{}}]".format
     lines = []
     for n, ((lk, la), op, (rk, ra)) in enumerate(specs):
-        left = f"{w}.{la}" if lk == "w" else value(la)  # type: ignore[arg-type]
-        right = f"{w}.{ra}" if rk == "w" else value(ra)  # type: ignore[arg-type]
-        x, y = f"cx{n}", f"cy{n}"
-        lines.append(f"{x} = {left}; {y} = {right}")
+        left_value = f"{wme}.{la}" if lk == "w" else value(la)  # type: ignore[arg-type]
+        right_value = f"{wme}.{ra}" if rk == "w" else value(ra)  # type: ignore[arg-type]
+        left, right = f"left_{n}", f"right_{n}"
+        lines.append(f"{left} = {left_value}; {right} = {right_value}")
         if op == "=":
-            lines.append(f"if {x} is not {y} and not ({x}.__class__ is {y}.__class__ "
-                         f"and {x} == {y}): {fail}")
+            lines.append(f"if {left} is not {right} and not ({left}.__class__ is "
+                         f"{right}.__class__ and {left} == {right}): {fail}")
         elif op == "<>":
-            lines.append(f"if {x} is {y} or ({x}.__class__ is {y}.__class__ "
-                         f"and {x} == {y}): {fail}")
+            lines.append(f"if {left} is {right} or ({left}.__class__ is {right}.__class__ "
+                         f"and {left} == {right}): {fail}")
         elif op == "<=>":
-            lines.append(f"if {x}.__class__ is not {y}.__class__: {fail}")
+            lines.append(f"if {left}.__class__ is not {right}.__class__: {fail}")
         elif op == "@":
             lines.append(fail)
         elif op in _ORDER_OPS:
-            lines.append(f"if {x}.__class__ in NUMBERS and {y}.__class__ in NUMBERS:")
-            lines.append(f"    if not ({x} {op} {y}): {fail}")
-            lines.append(f"elif not RELATIONS[{op!r}]({x}, {y}): {fail}")
+            lines.append(f"if {left}.__class__ in NUMBERS and {right}.__class__ in NUMBERS:")
+            lines.append(f"    if not ({left} {op} {right}): {fail}")
+            lines.append(f"elif not RELATIONS[{op!r}]({left}, {right}): {fail}")
         elif op != "!@":
             raise AssertionError(f"unknown relation {op!r}")
     return [pad + line for line in lines]
 
 
+def beta_tests_hold(specs: tuple[BetaSpec, ...], values: tuple, wme: WME) -> bool:
+    """Plain Python: whether every beta test of a join holds (``check_lines``)."""
+    for (lk, la), op, (rk, ra) in specs:
+        left = getattr(wme, la) if lk == "w" else values[la]  # type: ignore[arg-type, index]
+        right = getattr(wme, ra) if rk == "w" else values[ra]  # type: ignore[arg-type, index]
+        if op == "=":
+            if left is not right and not same_symbol(left, right):
+                return False
+        elif op == "<>":
+            if left is right or same_symbol(left, right):
+                return False
+        elif op == "<=>":
+            if left.__class__ is not right.__class__:
+                return False
+        elif op == "@":
+            return False
+        elif op in _ORDER_OPS:
+            if left.__class__ in NUMBERS and right.__class__ in NUMBERS:
+                if not _ORDER_OPS[op](left, right):
+                    return False
+            elif not RELATIONS[op](left, right):
+                return False
+        elif op != "!@":
+            raise AssertionError(f"unknown relation {op!r}")
+    return True
+
+
 def compile_check(specs: list[BetaSpec]) -> Callable[[tuple, WME], bool] | None:
-    """One Python function testing every beta test of a join, for the nodes that call it
-    per WME; its ``specs`` attribute lets generated loops inline the same tests."""
+    """One function testing every beta test of a join, for the nodes that call it per WME
+    (generated, or ``beta_tests_hold``); its ``specs`` attribute lets generated loops inline
+    the same tests."""
     if not specs:
         return None
-    lines = ["def check(vals, w):", *check_lines(specs, "vals", "w", "return False", "    "),
-             "    return True"]
-    check = define(lines, dict(CHECK_NAMES), "check")
+    if plain():
+        check: Callable = partial(beta_tests_hold, tuple(specs))
+    else:
+        lines = ["def check(values, wme):",
+                 *check_lines(specs, "values", "wme", "return False", "    "), "    return True"]
+        check = define(lines, dict(CHECK_NAMES), "check", "rete:beta-tests")
     check.specs = tuple(specs)  # type: ignore[attr-defined]
     return check
 
 
-def EXTEND_VALUE(vals: tuple, w: WME) -> tuple:  # noqa: N802 -- a marker as much as a function
-    return vals + (w.value,)
+def EXTEND_VALUE(values: tuple, wme: WME) -> tuple:  # noqa: N802 -- a marker as much as a function
+    return values + (wme.value,)
+
+
+def extend_values(fields: tuple[str, ...], values: tuple, wme: WME) -> tuple:
+    """Plain Python: ``values`` extended with the fields of ``wme`` a join binds."""
+    return values + tuple(getattr(wme, field) for field in fields)
 
 
 def extender(fields: tuple[str, ...]) -> Callable | None:
@@ -158,5 +247,13 @@ def extender(fields: tuple[str, ...]) -> Callable | None:
         return None
     if fields == ("value",):
         return EXTEND_VALUE
-    code = "lambda vals, w: vals + (" + "".join(f"w.{f}, " for f in fields) + ")"
-    return eval(code)  # noqa: S307 -- field names from FIELDS only
+    if plain():
+        return partial(extend_values, fields)
+    lines = ["def extend(values, wme):",
+             "    return values + (" + "".join(f"wme.{field}, " for field in fields) + ")"]
+    return define(lines, {}, "extend", "rete:extend")
+
+
+def index_of(index: dict, value: object) -> object:
+    """Plain Python: what ``index`` files under ``value`` (None if nothing)."""
+    return index.get(hash_key(value))
