@@ -16,6 +16,7 @@ from sann.soar.matching.plan import Plan
 from sann.soar.matching.templates import compile_alpha, filing_lines, unfiling_lines
 from sann.soar.matching.tokens import (
     ALPHA_CACHE_LIMIT,
+    AMEMS,
     ANY,
     FLOAT,
     GET,
@@ -211,7 +212,8 @@ class AlphaNetwork:
         for wme, info in self.registry.items():
             if self.accepts(amem, wme):
                 amem.add(wme)
-                info[0] = [*info[0], amem]  # a new list: it may be shared (see Rete.add_wme)
+                # a new list: it may be shared (see Rete.add_wme)
+                info[AMEMS] = [*info[AMEMS], amem]
         return amem
 
     @staticmethod
@@ -243,6 +245,6 @@ class AlphaNetwork:
         self.cache.clear()
         for wme in amem.wmes:
             info = self.registry[wme]
-            info[0] = [other for other in info[0] if other is not amem]  # may be shared
+            info[AMEMS] = [other for other in info[AMEMS] if other is not amem]  # may be shared
 
     # ----- building -----

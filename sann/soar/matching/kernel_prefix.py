@@ -34,9 +34,8 @@ def prefix_token(ordered: list, count: int, candidates: Candidates,
 
     A depth-first search that stops at the first token, each condition looking only at
     the WMEs ``candidates`` gives it (those of its bound identifier): its cost is that of
-    finding one partial match, not of listing all of them (a breadth-first join over all
-    the WMEs of each attribute listed every partial match of the prefix, and a prefix of
-    several multi-valued attributes of the state has thousands)."""
+    finding one partial match, not of listing all of them (a prefix of several
+    multi-valued attributes of the state has thousands)."""
     while count and (ordered[count - 1].negated or ordered[count - 1].is_ncc):
         count -= 1  # a negative or NCC node holds its blocked tokens too (no beta memory)
     chosen: list[tuple[int, Condition, WME]] = []

@@ -21,6 +21,8 @@ from sann.soar.matching.templates import (
     token_lines,
 )
 from sann.soar.matching.tokens import (
+    BLOCKED,
+    BUILT,
     FLOAT,
     GET,
     Token,
@@ -171,14 +173,14 @@ class JoinNode(Node):
                      "    if key.__class__ is float: key = (FLOAT, key)",
                      "    bucket = alpha_index.get(key)", "    if bucket is None: return"]
         left += [f"    for wme in {'bucket' if hashed else 'alpha_wmes'}:"] + join_body(
-            self, namespace, grow, "wme_records[wme][1][token] = None")
+            self, namespace, grow, f"wme_records[wme][{BUILT}][token] = None")
         right = ["def right_activate(wme):"]
         if hashed:
             right.append(f"    key = wme.{self.field}")
             if self.field != "id":  # identifiers are never floats
                 right.append("    if key.__class__ is float: key = (FLOAT, key)")
             right += ["    bucket = parent_index.get(key)", "    if bucket is None: return"]
-        right += ["    built = wme_records[wme][1]",
+        right += [f"    built = wme_records[wme][{BUILT}]",
                   f"    for parent in {'bucket' if hashed else 'parent_tokens'}:",
                   "        values = parent.vals"] + join_body(
             self, namespace, grow, "built[token] = None")
@@ -196,7 +198,7 @@ class JoinNode(Node):
         else:
             bucket = self.amem.wmes
         for wme in bucket:  # type: ignore[attr-defined]
-            self._plain_join(parent, values, wme, self.registry[wme][1])
+            self._plain_join(parent, values, wme, self.registry[wme][BUILT])
 
     def plain_right_activate(self, wme: WME) -> None:
         """Plain Python: a new WME joins each parent token it fits."""
@@ -207,7 +209,7 @@ class JoinNode(Node):
                 return
         else:
             bucket = self.parent.tokens  # type: ignore[union-attr]
-        built = self.registry[wme][1]
+        built = self.registry[wme][BUILT]
         for parent in bucket:  # type: ignore[attr-defined]
             self._plain_join(parent, parent.vals, wme, built)
 
@@ -330,15 +332,15 @@ class NegativeNode(Node):
         info = self.registry
         for wme in tok.extra:
             record = info.get(wme)
-            if record is not None and record[2]:
-                record[2].pop(tok, None)
+            if record is not None and record[BLOCKED]:
+                record[BLOCKED].pop(tok, None)
 
 
 
 def _block_tok(record: list, tok: Token) -> None:
-    blocked = record[2]
+    blocked = record[BLOCKED]
     if blocked is None:
-        record[2] = {tok: None}
+        record[BLOCKED] = {tok: None}
     else:
         blocked[tok] = None
 
@@ -475,7 +477,7 @@ def delete_tokens(registry: dict[WME, list], stack: list[Token]) -> None:
                         del index[key]
             record = info.get(tok.wme)
             if record is not None:
-                del record[1][tok]
+                del record[BUILT][tok]
         else:
             node.forget(tok)
         tok.node = None

@@ -1,9 +1,9 @@
 """Conjunctive negations answered by a query over the alpha memories (``QueryNCCNode``).
 
 A conjunctive negation without a nested one is not a subnetwork of tokens but a compiled
-query (query.py) that keeps one witness per blocked token: Python pays per token, and the
-subnetwork's partial matches were most of the tokens in rules such as "the top disk of a
-peg".
+query (query.py) that keeps one witness per blocked token: Python pays per token, and in
+rules such as "the top disk of a peg" the subnetwork's partial matches would be most of
+the tokens.
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ from sann.soar.matching.templates import (
 from sann.soar.matching.tokens import (
     FLOAT,
     GET,
+    WITNESSED,
     Token,
     adopt,
     compile_first,
@@ -305,17 +306,17 @@ class QueryNCCNode(Node):
         records = self.registry
         for witness in found[1]:
             record = records[witness]
-            if record[3] is None:
-                record[3] = {token: None}
+            if record[WITNESSED] is None:
+                record[WITNESSED] = {token: None}
             else:
-                record[3][token] = None
+                record[WITNESSED][token] = None
 
     def _unwitness(self, token: Token) -> None:
         """Drop the witness of ``token`` (``_unwitness_lines``)."""
         for witness in token.extra[1]:
             record = self.registry.get(witness)
-            if record is not None and record[3]:
-                record[3].pop(token, None)
+            if record is not None and record[WITNESSED]:
+                record[WITNESSED].pop(token, None)
         token.extra = None
 
     def _block(self, token: Token, found: tuple[tuple, tuple]) -> None:
@@ -353,5 +354,6 @@ class QueryNCCNode(Node):
 def _unwitness_lines(pad: str) -> list[str]:
     """Generated code: drop the witness of ``token`` (what ``_unwitness`` does)."""
     return [f"{pad}for witness in token.extra[1]:", f"{pad}    record = wme_records.get(witness)",
-            f"{pad}    if record is not None and record[3]: record[3].pop(token, None)",
+            f"{pad}    if record is not None and record[{WITNESSED}]:",
+            f"{pad}        record[{WITNESSED}].pop(token, None)",
             f"{pad}token.extra = None"]

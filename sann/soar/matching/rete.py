@@ -19,7 +19,16 @@ from sann.soar.matching.matches import Changes, Match
 from sann.soar.matching.nodes import NCCNode, NegativeNode, Node, PartnerNode, delete_tokens
 from sann.soar.matching.production_node import Layout, ProductionNode
 from sann.soar.matching.query_ncc import QueryNCCNode
-from sann.soar.matching.tokens import IDENT, UNTESTED, new_token, unlink_tokens
+from sann.soar.matching.tokens import (
+    AMEMS,
+    BLOCKED,
+    BUILT,
+    IDENT,
+    UNTESTED,
+    WITNESSED,
+    new_token,
+    unlink_tokens,
+)
 from sann.soar.matching.variables import bound_by
 from sann.soar.memory import WME, Identifier
 from sann.soar.parsing.checks import check_production
@@ -166,9 +175,9 @@ class Rete:
         info = self._wme_info.pop(wme, None)
         if info is None:
             raise ValueError(f"{wme!r} is not in working memory")
-        for amem in info[0]:
+        for amem in info[AMEMS]:
             amem.on_remove(wme)
-        built = info[1]
+        built = info[BUILT]
         if built:
             # Detached from their parents first, then deleted in one walk (a token built on
             # this WME below another one is detached from its still-live parent: each is
@@ -180,7 +189,7 @@ class Rete:
                     doomed.append(tok)
             doomed.reverse()  # the walk pops from the end: the first built goes first
             delete_tokens(self._wme_info, doomed)
-        blocked = info[2]
+        blocked = info[BLOCKED]
         if blocked:
             for tok in blocked:
                 node = tok.node
@@ -189,13 +198,13 @@ class Rete:
                     del blockers[wme]
                     if not blockers:
                         node.unblock(tok)
-        witnessed = info[3]
+        witnessed = info[WITNESSED]
         if witnessed:
             for tok in list(witnessed):
                 node = tok.node
                 if node is not None and tok.extra is not None:
                     node.recheck(tok)
-        for amem in info[0]:
+        for amem in info[AMEMS]:
             if amem.listeners:
                 for node, k in amem.listeners:
                     if node.owners and node.levels[k].negated:

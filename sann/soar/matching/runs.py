@@ -21,7 +21,7 @@ from sann.soar.matching.templates import (
     token_lines,
     unfiling_lines,
 )
-from sann.soar.matching.tokens import FLOAT, Token, adopt, hash_key, index_add, new_token
+from sann.soar.matching.tokens import BUILT, FLOAT, Token, adopt, hash_key, index_add, new_token
 from sann.soar.memory import WME, mypyc_attr
 
 
@@ -87,7 +87,7 @@ def compile_run(node: RunNode, seed: int) -> Callable:
     lines += [*token_lines(pad, "parent", f"({wmes})",
                            f"values + ({bound})" if bound else "values"),
               *adopt_lines(pad, "parent")]
-    lines += [f"{pad}wme_records[wme_{k}][1][token] = None" for k in range(len(members))]
+    lines += [f"{pad}wme_records[wme_{k}][{BUILT}][token] = None" for k in range(len(members))]
     lines.append(f"{pad}tokens[token] = None")
     for k, (pos, index) in enumerate(node.index_list):
         namespace[f"token_index_{k}"] = index
@@ -147,7 +147,7 @@ class RunNode(Node):
         lines.append(f"    {', '.join(wmes)}, = token.wme")
         for wme in wmes:
             lines += [f"    record = wme_records.get({wme})",
-                      "    if record is not None: record[1].pop(token, None)"]
+                      f"    if record is not None: record[{BUILT}].pop(token, None)"]
         self.forget = define(lines, namespace, "forget", "rete:run")
 
     def index(self, pos: int) -> dict:
@@ -204,7 +204,7 @@ class RunNode(Node):
         token = new_token(parent, tuple(chosen), values + bound, self)
         adopt(parent, token)
         for wme in chosen:
-            self.registry[wme][1][token] = None
+            self.registry[wme][BUILT][token] = None
         self.tokens[token] = None
         for pos, index in self.index_list:
             index_add(index, token.vals[pos], token)
@@ -217,4 +217,4 @@ class RunNode(Node):
         for wme in token.wme:
             record = self.registry.get(wme)
             if record is not None:
-                record[1].pop(token, None)
+                record[BUILT].pop(token, None)

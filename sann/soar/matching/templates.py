@@ -19,7 +19,7 @@ from functools import partial
 from sann.soar.codegen import define, plain
 from sann.soar.matching.plan import BetaSpec
 from sann.soar.matching.symbols import RELATIONS, same_symbol
-from sann.soar.matching.tokens import hash_key
+from sann.soar.matching.tokens import WITNESSED, hash_key
 from sann.soar.memory import WME
 
 NUMBERS = frozenset((int, float))
@@ -89,8 +89,8 @@ def witness_lines(pad: str) -> list[str]:
     """Generated code: keep ``found`` as the witness of the blocked ``token`` (what
     ``QueryNCCNode._witness`` does, inline; ``wme_records`` is the Rete's WME records)."""
     return [f"{pad}token.extra = found", f"{pad}for witness in found[1]:",
-            f"{pad}    record = wme_records[witness]", f"{pad}    witnessed = record[3]",
-            f"{pad}    if witnessed is None: record[3] = {{token: None}}",
+            f"{pad}    record = wme_records[witness]", f"{pad}    witnessed = record[{WITNESSED}]",
+            f"{pad}    if witnessed is None: record[{WITNESSED}] = {{token: None}}",
             f"{pad}    else: witnessed[token] = None"]
 
 

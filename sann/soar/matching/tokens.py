@@ -11,7 +11,7 @@ the negative-node tokens it blocks; each token knows its children.
 from __future__ import annotations
 
 from operator import attrgetter
-from typing import Any
+from typing import Any, Final
 
 from sann.soar.memory import mypyc_attr
 
@@ -23,6 +23,14 @@ FIELDS = ("id", "attr", "value")
 GET = {name: attrgetter(name) for name in FIELDS}
 _INDEX_PREFERENCE = {"id": 0, "value": 1, "attr": 2}
 ALPHA_CACHE_LIMIT = 100_000
+
+#: A WME's record in the Rete (``Rete._wme_info``) is a list indexed by these: its alpha
+#: memories, the tokens built on it, the negative-node tokens it blocks and the query NCC
+#: tokens it is a witness of (a list, not an object: the generated code indexes it).
+AMEMS: Final = 0
+BUILT: Final = 1
+BLOCKED: Final = 2
+WITNESSED: Final = 3
 
 
 def hash_key(value: object) -> object:
@@ -62,7 +70,7 @@ class Token:
     of a production-node token.  Hashed by identity.
 
     Slots, not a list: CPython 3.11 specializes slot reads and writes, not the subscripts of
-    a list subclass (three times slower), and the hot paths read tokens all the time.  No
+    a list subclass, and the hot paths read tokens all the time.  No
     ``__init__``: tokens are made by calling the bare class and storing the six slots
     (inline in generated code, ``token_lines``), cheaper than passing them to ``__init__``
     and than ``object.__new__(Token)``."""
