@@ -4,7 +4,7 @@
 productions and WMEs go in, new and retracted matches come out (``take_changes``).  An
 alpha network hashed on constant attribute and value tests (alpha.py) feeds hashed beta
 joins, negative and conjunctive-negation nodes (nodes.py, query_ncc.py, runs.py) with
-shared prefixes, built by builder.py in the join order of join_order.py; removal is
+shared prefixes, built by build.py in the join order of join_order.py; removal is
 tree-based.  Adding or removing a WME costs in proportion to the alpha memories and tokens
 it touches, not to the size of working memory.  ``Match.wmes`` stays in written order.
 """
