@@ -296,7 +296,7 @@ class NegativeNode(Node):
         tok.extra = blockers
         info = self.registry
         for wme in blockers:
-            _block_tok(info[wme], tok)
+            _blocked_by(info[wme], tok)
 
     def right_activate(self, wme: WME) -> None:
         if self.pos >= 0:
@@ -316,7 +316,7 @@ class NegativeNode(Node):
                     delete_children(self.registry, tok)
                 else:
                     blockers[wme] = None
-                _block_tok(info, tok)
+                _blocked_by(info, tok)
 
     def unblock(self, tok: Token) -> None:
         tok.extra = None
@@ -336,8 +336,8 @@ class NegativeNode(Node):
                 record[BLOCKED].pop(tok, None)
 
 
-
-def _block_tok(record: list, tok: Token) -> None:
+def _blocked_by(record: list, tok: Token) -> None:
+    """Note in a WME's record that it blocks the negative-node token ``tok``."""
     blocked = record[BLOCKED]
     if blocked is None:
         record[BLOCKED] = {tok: None}

@@ -15,6 +15,7 @@ from __future__ import annotations
 import operator
 from collections.abc import Callable, Sequence
 from functools import partial
+from typing import Any
 
 from sann.soar.codegen import define, plain
 from sann.soar.matching.plan import BetaSpec
@@ -23,7 +24,7 @@ from sann.soar.matching.tokens import WITNESSED, hash_key
 from sann.soar.memory import WME
 
 NUMBERS = frozenset((int, float))
-_ORDER_OPS: dict[str, Callable[[object, object], bool]] = {
+_ORDER_OPS: dict[str, Callable[[Any, Any], Any]] = {
     "<": operator.lt, ">": operator.gt, "<=": operator.le, ">=": operator.ge}
 _TYPES = {"int": int, "float": float}
 #: The names the inlined beta tests read.
