@@ -38,6 +38,11 @@ from .instantiation import (
     tested_operators,
 )
 from .io import InputHandle, OutputHandle, WMEHandle
+from .matching.kernel_order import KernelOrder
+from .matching.kernel_prefix import prefix_token
+from .matching.oracle import negation_matches
+from .matching.oracle import wme_fits as _wme_fits
+from .matching.variables import equality_vars
 from .memory import WME, Identifier, IdentifierFactory, Symbol
 from .preferences import ACCEPTABLE, PROHIBIT, REJECT, REQUIRE, Preference, Slot
 from .production import (
@@ -51,7 +56,6 @@ from .production import (
     same_production,
 )
 from .results import find_results
-from .rete import KernelOrder, _wme_fits, equality_vars, negation_matches, prefix_token
 from .rhs import FUNCTIONS
 from .rhs.rand import kernel_random
 from .text import format_value
@@ -85,7 +89,7 @@ def _raise_gc_threshold() -> None:
 
 
 def _default_matcher() -> type:
-    from .rete import Rete
+    from .matching.rete import Rete
 
     return Rete
 

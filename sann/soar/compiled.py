@@ -33,12 +33,28 @@ HERE = Path(__file__).resolve().parent
 #: A name is relative to this package, dotted for a subpackage's module ("matching.rete").
 MODULES = (
     "memory",
-    "rete",
     "preferences",
     "instantiation",
     "decide",
     "goals",
     "agent",
+    "matching.symbols",
+    "matching.variables",
+    "matching.matches",
+    "matching.oracle",
+    "matching.tokens",
+    "matching.plan",
+    "matching.templates",
+    "matching.alpha",
+    "matching.nodes",
+    "matching.query_ncc",
+    "matching.runs",
+    "matching.production_node",
+    "matching.join_order",
+    "matching.build",
+    "matching.rete",
+    "matching.kernel_prefix",
+    "matching.kernel_order",
 )
 #: The shared library of the compiled modules is ``sann/soar/_engine__mypyc.*.so``.
 GROUP = f"{PACKAGE}._engine"

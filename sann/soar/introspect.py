@@ -3,19 +3,23 @@ procedure, as text in the Soar 9.6 kernel's format (measured with ``soar_sml``).
 
 Everything here is computed on demand from the agent's working memory, match queues and
 slots: partial matches are counted by joining the conditions in the kernel's order
-(`reorder.py`) over working memory, so the engine keeps no extra bookkeeping for them.
+(`matching/reorder.py`) over working memory, so the engine keeps no extra bookkeeping for them.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
+from .decide import NONE as NO_IMPASSE
+from .decide import numeric_values, run_preference_semantics
 from .errors import SoarRuntimeError
+from .matching.oracle import PartialMatch, join_condition, negation_matches, test_holds
+from .matching.reorder import KCond, format_kcond, kernel_conditions, positive_order, symbol_ages
+from .matching.variables import condition_fields
 from .memory import WME, Identifier
-from .production import Condition, ConjunctiveNegation, Production
-from .reorder import KCond, format_kcond, kernel_conditions, positive_order, symbol_ages
-from .rete import PartialMatch, _fields, _test_holds, join_condition, negation_matches
+from .production import Condition, ConjunctiveNegation, Const, Production
 from .trace import symbol_text, trace_wme
 
 if TYPE_CHECKING:
@@ -220,10 +224,8 @@ def _alpha_accepts(element: ConjunctiveNegation | Condition, wme: WME) -> bool:
     assert isinstance(element, Condition)
     if wme.acceptable != element.acceptable:
         return False
-    from .production import Const
-
-    for test, value in zip(_fields(element), (wme.id, wme.attr, wme.value), strict=True):
-        if isinstance(test, Const) and not _test_holds(test, value, {}, final=False):
+    for test, value in zip(condition_fields(element), (wme.id, wme.attr, wme.value), strict=True):
+        if isinstance(test, Const) and not test_holds(test, value, {}, final=False):
             return False
     return True
 
@@ -359,9 +361,6 @@ def _source_text(agent: Agent, pref: object, level: int) -> str:
 
 def _probabilities(agent: Agent, slot: object, level: int) -> str:
     """The exploration policy's chance of each candidate, when the slot would choose."""
-    from .decide import NONE as NO_IMPASSE
-    from .decide import numeric_values, run_preference_semantics
-
     impasse, candidates = run_preference_semantics(slot, None, consistency=True)  # type: ignore[arg-type]
     if impasse != NO_IMPASSE or not candidates:
         return ""
@@ -379,8 +378,6 @@ def _probabilities(agent: Agent, slot: object, level: int) -> str:
 
 
 def _chances(exploration: object, values: list[float]) -> list[float]:
-    import math
-
     n = len(values)
     policy = exploration.policy  # type: ignore[attr-defined]
     if n == 1:

@@ -49,5 +49,5 @@ def test_the_archive_runs_the_engine_alone(tmp_path: Path) -> None:
 
 def test_the_archive_holds_the_package_sources() -> None:
     files = {name: source for source, name in _live_ext().engine_files()}
-    for name in ("sann/soar/rete.py", "sann/exercises.py", "sann/rules/hanoi.soar"):
+    for name in ("sann/soar/matching/rete.py", "sann/exercises.py", "sann/rules/hanoi.soar"):
         assert files[name] == ROOT / name

@@ -7,7 +7,7 @@ import io
 import pytest
 
 from sann.soar import Agent, SoarRuntimeError, SoarSyntaxError
-from sann.soar.rete import BruteForceMatcher
+from sann.soar.matching.oracle import BruteForceMatcher
 
 COUNTER = """
 sp {propose*init

@@ -22,7 +22,7 @@ import pytest
 from differential.kernel import run_kernel, run_ours
 
 from sann.soar import Agent
-from sann.soar.rete import prefix_token
+from sann.soar.matching.kernel_prefix import prefix_token
 
 pytest.importorskip("soar_sml")
 

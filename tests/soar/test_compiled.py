@@ -58,7 +58,7 @@ def test_make_test_runs_the_compiled_engine() -> None:
 
 @pytest.mark.skipif(not BUILT, reason="no compiled engine here")
 def test_interpreted_on_request() -> None:
-    code = ("from sann.soar import compiled, agent, rete; "
+    code = ("from sann.soar import compiled, agent; from sann.soar.matching import rete; "
             "print(compiled.is_compiled(), agent.__file__.endswith('.py'), "
             "rete.__file__.endswith('.py'))")
     run = _python(code, SANN_INTERPRETED="1")

@@ -8,10 +8,13 @@ from __future__ import annotations
 import pytest
 
 from sann.soar.errors import SoarSemanticError
+from sann.soar.matching.matches import Match
+from sann.soar.matching.oracle import BruteForceMatcher
+from sann.soar.matching.rete import Rete
+from sann.soar.matching.symbols import symbol_order_less
 from sann.soar.memory import WME, Identifier, IdentifierFactory
 from sann.soar.parsing.parser import parse_production
 from sann.soar.production import Condition, Const, Production, Var
-from sann.soar.rete import BruteForceMatcher, Match, Rete, symbol_order_less
 
 MATCHERS = [Rete, BruteForceMatcher]
 
@@ -378,7 +381,7 @@ def test_run_nodes_are_shared_and_removed() -> None:
     for t, wme in enumerate([(s1, "block", b), (b, "size", 2), (b, "color", "red"),
                              (s1, "mode", "go")]):
         rete.add_wme(WME(*wme, t))  # type: ignore[arg-type]
-    runs = [n for n in _nodes(rete) if type(n).__name__ == "_RunNode"]
+    runs = [n for n in _nodes(rete) if type(n).__name__ == "RunNode"]
     assert runs and len(rete.matches("one")) == len(rete.matches("two")) == 1
     (match,) = rete.matches("one")
     assert [w.attr for w in match.wmes] == ["block", "size", "color", "mode"]

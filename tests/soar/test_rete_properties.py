@@ -10,6 +10,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from sann.soar.errors import SoarSemanticError
+from sann.soar.matching.matches import Match
+from sann.soar.matching.oracle import BruteForceMatcher
+from sann.soar.matching.rete import Rete
 from sann.soar.memory import WME, Identifier
 from sann.soar.production import (
     Condition,
@@ -22,7 +25,6 @@ from sann.soar.production import (
     Relational,
     Var,
 )
-from sann.soar.rete import BruteForceMatcher, Match, Rete
 
 STATES = [Identifier("S", 1, level=1), Identifier("S", 2, level=2)]
 OTHERS = [Identifier("A", 1), Identifier("B", 2), Identifier("C", 3)]

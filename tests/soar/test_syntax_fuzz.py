@@ -15,6 +15,7 @@ from hypothesis import strategies as st
 
 from sann.soar.errors import SoarSemanticError, SoarSyntaxError
 from sann.soar.parsing.actions import KNOWN_RHS_FUNCTIONS
+from sann.soar.parsing.checks import kernel_refusals
 from sann.soar.parsing.normalise import drop_unbound_relations
 from sann.soar.parsing.parser import parse
 from sann.soar.printer import format_production
@@ -32,7 +33,6 @@ from sann.soar.production import (
     Relational,
     Var,
 )
-from sann.soar.rete import kernel_refusals
 
 ROOT = Path(__file__).resolve().parents[2]
 # Mutations often make a preference land on a non-operator attribute: the kernel's warning.

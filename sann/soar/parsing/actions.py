@@ -20,10 +20,10 @@ import dataclasses
 from collections.abc import Collection, Iterator
 
 from sann.soar.errors import SoarSemanticError
+from sann.soar.parsing.checks import kernel_refusals
 from sann.soar.parsing.normalise import lhs_bound
 from sann.soar.printer import format_action
 from sann.soar.production import Action, CallAction, Const, FuncCall, MakeAction, Production, Var
-from sann.soar.rete import kernel_refusals
 
 __all__ = [
     "KNOWN_RHS_FUNCTIONS",

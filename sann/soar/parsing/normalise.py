@@ -19,6 +19,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable
 
+from sann.soar.matching.variables import equality_vars
 from sann.soar.production import (
     Action,
     CallAction,
@@ -34,7 +35,6 @@ from sann.soar.production import (
     Test,
     Var,
 )
-from sann.soar.rete import equality_vars
 
 __all__ = [
     "TEMPORARY",

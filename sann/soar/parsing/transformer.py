@@ -22,6 +22,7 @@ from lark import Token, Transformer
 
 from sann.soar.errors import SoarSyntaxError
 from sann.soar.parsing.actions import KNOWN_RHS_FUNCTIONS, SHELL_REFUSAL, check_production
+from sann.soar.parsing.checks import load_warnings
 from sann.soar.parsing.errors import syntax_error
 from sann.soar.parsing.normalise import (
     TEMPORARY,
@@ -51,7 +52,6 @@ from sann.soar.production import (
     Test,
     Var,
 )
-from sann.soar.rete import load_warnings
 
 __all__ = ["ToDataclasses"]
 

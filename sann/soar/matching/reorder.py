@@ -17,7 +17,7 @@ them, and their WMEs, in that order. This module reproduces the order as measure
   newest symbol, else to the later-written condition.
 
 Symbol age: the kernel numbers symbols as it creates them; the architecture's own symbols
-(measured order, ``_PREDEFINED``) are older than any rule's, and a rule's constants are as
+(measured order, ``PREDEFINED``) are older than any rule's, and a rule's constants are as
 old as the first loaded rule that wrote them.
 
 The kernel's parser also gives every value test without an equality test a variable (``^a >
@@ -32,7 +32,8 @@ import re
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field, replace
 
-from .production import (
+from sann.soar.printer import format_constant
+from sann.soar.production import (
     Action,
     CallAction,
     Condition,
@@ -53,7 +54,7 @@ BRANCHING = 8  # the kernel's branching factor for what it cannot estimate
 
 #: Symbols the 9.6 kernel makes before any rule, oldest first (measured by which of two
 #: tied conditions it orders first).
-_PREDEFINED = (
+PREDEFINED = (
     "problem-space state operator superstate io object attribute impasse choices none "
     "constraint-failure no-change multiple item-count non-numeric-count conflict tie item "
     "non-numeric quiescence t nil type goal name input-link output-link reward-link reward "
@@ -72,14 +73,14 @@ _GENSYM = re.compile(r"^([a-z])\*\d+$")
 
 def symbol_ages(productions: Iterable[Production]) -> dict[tuple[type, object], int]:
     """Creation rank of every constant the rules mention (bigger = made later)."""
-    ages: dict[tuple[type, object], int] = {(str, s): i for i, s in enumerate(_PREDEFINED)}
+    ages: dict[tuple[type, object], int] = {(str, s): i for i, s in enumerate(PREDEFINED)}
     for production in productions:
-        for value in _constants(production):
+        for value in constants(production):
             ages.setdefault((type(value), value), len(ages))
     return ages
 
 
-def _constants(production: Production) -> Iterator[object]:
+def constants(production: Production) -> Iterator[object]:
     yield production.name
     yield from _condition_constants(production)
     for action in production.actions:
@@ -255,8 +256,6 @@ def _field(test: Test, namer: _Namer, hint: str | None) -> list[str]:
 
 
 def _constant(value: object) -> str:
-    from .printer import format_constant
-
     if isinstance(value, float):
         return f"{value:f}"
     return format_constant(value)  # type: ignore[arg-type]
