@@ -4,9 +4,12 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 BOOK_HTML := book/_build/html/index.html
-# The engine's modules that mypyc compiles (setup.py; sann/soar/compiled.py says which and why).
-ENGINE := $(patsubst %,sann/soar/%.py,memory rete preferences instantiation decide goals agent)
+# The engine's modules that mypyc compiles: sann/soar/compiled.py's MODULES, the one list (any
+# python3 reads it: the venv may not exist yet).
+ENGINE := $(shell python3 sann/soar/compiled.py --sources)
 COMPILED := sann/soar/_engine.sha256
+# Removes the extension modules a build left beside the sources (and the group's library).
+RM_ENGINE_SO := find sann/soar -name '*.so' -delete
 
 .PHONY: book test engine lab lint bench clean
 
@@ -27,9 +30,10 @@ $(STAMP): environment.txt pyproject.toml
 # The compiled engine: about two minutes of gcc, redone when an engine module changes. A failed
 # build leaves no extension module behind (the engine then runs from its sources, slower).
 $(COMPILED): $(STAMP) $(ENGINE) setup.py sann/soar/compiled.py
-	rm -rf build $(COMPILED) sann/soar/*.so
+	rm -rf build $(COMPILED)
+	$(RM_ENGINE_SO)
 	$(PY) setup.py --quiet build_ext --inplace > build.log 2>&1 \
-	  || { rm -f sann/soar/*.so; tail -30 build.log; echo "compiling the engine failed (build.log)"; exit 1; }
+	  || { $(RM_ENGINE_SO); tail -30 build.log; echo "compiling the engine failed (build.log)"; exit 1; }
 	rm -rf build build.log
 
 engine: $(COMPILED)
@@ -69,4 +73,5 @@ bench: $(STAMP) $(COMPILED)
 
 # The book's caches: executed chapters (book/_build/.jupyter_cache) and datasets (.sann-cache).
 clean:
-	rm -rf book/_build .sann-cache build build.log $(COMPILED) sann/soar/*.so
+	rm -rf book/_build .sann-cache build build.log $(COMPILED)
+	$(RM_ENGINE_SO)

@@ -27,7 +27,7 @@ if "build_ext" in sys.argv:
     compiled = _compiled_module()
     hashes = compiled.source_hashes()  # of the sources as they are compiled
     compiled.MANIFEST.unlink(missing_ok=True)
-    sources = [f"sann/soar/{name}.py" for name in compiled.MODULES]
+    sources = [str(compiled.source_file(name).relative_to(ROOT)) for name in compiled.MODULES]
     setup(ext_modules=mypycify(sources, opt_level="3", group_name=compiled.GROUP))
     compiled.write_manifest(hashes)
 else:

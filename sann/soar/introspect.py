@@ -359,8 +359,8 @@ def _source_text(agent: Agent, pref: object, level: int) -> str:
 
 def _probabilities(agent: Agent, slot: object, level: int) -> str:
     """The exploration policy's chance of each candidate, when the slot would choose."""
-    from .decide import NONE as NO_IMPASSE
-    from .decide import numeric_values, run_preference_semantics
+    from .decision.preference_semantics import NONE as NO_IMPASSE
+    from .decision.preference_semantics import numeric_values, run_preference_semantics
 
     impasse, candidates = run_preference_semantics(slot, None, consistency=True)  # type: ignore[arg-type]
     if impasse != NO_IMPASSE or not candidates:

@@ -27,7 +27,9 @@ def _python(code: str, cwd: Path = ROOT, **env: str) -> subprocess.CompletedProc
 
 def _fake_tree(tmp_path: Path) -> Path:
     for name in compiled.MODULES:
-        (tmp_path / f"{name}.py").write_text(f"NAME = {name!r}\n")
+        source = compiled.source_file(name, tmp_path)
+        source.parent.mkdir(parents=True, exist_ok=True)
+        source.write_text(f"NAME = {name!r}\n")
     return tmp_path
 
 
@@ -38,8 +40,9 @@ def test_manifest_round_trip_and_stale_sources(tmp_path: Path) -> None:
     compiled.write_manifest(compiled.source_hashes(tree), manifest)
     assert compiled.read_manifest(manifest) == compiled.source_hashes(tree)
     assert compiled.stale_modules(tree, manifest) == []
-    (tree / "rete.py").write_text("NAME = 'edited'\n")
-    assert compiled.stale_modules(tree, manifest) == ["rete"]
+    edited = compiled.MODULES[1]
+    compiled.source_file(edited, tree).write_text("NAME = 'edited'\n")
+    assert compiled.stale_modules(tree, manifest) == [edited]
     assert not list(tree.glob("*.partial"))
 
 
@@ -94,3 +97,16 @@ def test_interpreted_engine_passes_the_differential_agents() -> None:
         env={**os.environ, "SANN_INTERPRETED": "1"})
     assert run.returncode == 0, run.stdout[-3000:]
     assert " passed" in run.stdout
+
+
+def test_makefile_and_setup_read_the_one_list_of_modules() -> None:
+    """``compiled.py --sources`` (what the Makefile's prerequisites are) names each module of
+    MODULES by its source file, dotted names as subpackage paths."""
+    run = subprocess.run([sys.executable, "sann/soar/compiled.py", "--sources"], cwd=ROOT,
+                         text=True, capture_output=True, timeout=60)
+    assert run.returncode == 0, run.stderr
+    listed = run.stdout.split()
+    assert listed == [compiled.source_file(name).relative_to(ROOT).as_posix()
+                      for name in compiled.MODULES]
+    assert all((ROOT / path).is_file() for path in listed)
+    assert compiled.source_file("matching.rete", Path("/x")) == Path("/x/matching/rete.py")
