@@ -39,6 +39,29 @@ def vkey(value: Symbol | None) -> object:
     return value if type(value) is not float else (float, value)
 
 
+class JoinLink:
+    """What the agent knows of when the kernel's Rete last linked one join to its alpha
+    memory (``firing_order._join_link``): the kernel unlinks a join whose parent memory
+    is empty and relinks it when a token comes, so the join's place in the memory's list
+    is that of the token that relinked it."""
+
+    __slots__ = ("link", "witness", "production", "place", "looked", "seen")
+
+    def __init__(self, link: tuple, witness: tuple, production: str, place: tuple,
+                 looked: int, seen: set[tuple]) -> None:
+        #: the relinking sort key: ``_token_link`` of the earliest token seen
+        self.link = link
+        #: a token of the parent memory (its WMEs) that is still in working memory
+        self.witness = witness
+        #: the production and its join's place (``rete.KernelOrder``) looked up for
+        self.production = production
+        self.place = place
+        #: the agent's ``_collects`` when the record was made
+        self.looked = looked
+        #: the tokens of the memory seen since (the memory did not empty meanwhile)
+        self.seen = seen
+
+
 class AgentState:
     """The decision cycle's data (see the module docstring)."""
 
@@ -94,30 +117,28 @@ class AgentState:
         self._refs: dict[Identifier, int] = {}
         self._in_wm_phase = False
         self._phase_timetag = 0
-        # the newest timetag when the matcher's changes were last taken (_collect_changes)
+        # the newest timetag when the matcher's changes were last taken (collect_changes)
         self._batch_start = 0
         # (goal, instantiation) whose o-supported local preferences extend the goal's GDS
-        # once the wave's preferences are asserted (_grow_gds)
+        # once the wave's preferences are asserted (grow_gds)
         self._gds_requests: list[tuple[Goal, Instantiation]] = []
         # every earlier _batch_start that began a batch of new WMEs (see _entry_rank)
         self._batch_starts: list[int] = []
         # _batch_of of the joins' birth timetags: it changes no more once asked for (a
         # later batch starts after every WME already made)
         self._born_batches: dict[int, int] = {}
-        # per kernel join (serial): when it was last linked (_join_link), a token of its
-        # parent memory (WMEs), the production and place it was looked up for, the
-        # _collects count of the look, and the tokens of the memory seen since
-        self._join_links: dict[int, tuple] = {}
-        self._collects = 0  # the takes of matcher changes so far (_collect_changes)
-        # the links of the joins whose memory _check_links found emptied, before
+        # per kernel join (serial): when it was last linked (firing_order._join_link)
+        self._join_links: dict[int, JoinLink] = {}
+        self._collects = 0  # the takes of matcher changes so far (collect_changes)
+        # the links of the joins whose memory check_links found emptied, before
         self._links_before: dict[int, tuple] = {}
-        # working memory by identifier, then attribute (_vkey), kept once _candidates
+        # working memory by identifier, then attribute (vkey), kept once _candidates
         # needs it
         self._by_id: dict[Symbol, dict[object, dict[WME, None]]] | None = None
-        # working memory by attribute (_vkey), kept once _wmes_of needs it
+        # working memory by attribute (vkey), kept once _wmes_of needs it
         self._by_attr: dict[object, dict[WME, None]] | None = None
-        # removed WMEs by identifier, then attribute (_vkey), with when the kernel's Rete
-        # took each out (_removal_rank): the unblocking of the negations they matched
+        # removed WMEs by identifier, then attribute (vkey), with when the kernel's Rete
+        # took each out (_unblock_rank): the unblocking of the negations they matched
         self._removed: dict[Symbol, dict[object, dict[WME, tuple[int, int]]]] = {}
         self._removed_size = 0
         self._removed_limit = 4096

@@ -252,7 +252,7 @@ def _fire_level(agent: AgentState, goal: Goal, firing: str, change_level: int) -
     if postponed:
         # They keep their places in the queue (measured in soar_sml: two snc matches
         # the waterfall put off, of (S1 ^count 2) and the newer-entered (S1 ^count 0),
-        # fire count 0 first, as they would have; we had reversed them).
+        # fire count 0 first, as they would have).
         queue.update(reversed(postponed))
     assert_preferences(agent, fired, o_support)
     if agent._gds_requests:

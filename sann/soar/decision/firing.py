@@ -212,7 +212,7 @@ def remove_preference(agent: AgentState, pref: Preference) -> None:
     pref.live = False
     # A removed preference no longer needs its instantiation; dropping the link breaks
     # the inst.prefs <-> pref.inst cycle, so reference counting frees both at once and
-    # the cyclic garbage collector (a quarter of the run time when it had to) stays idle.
+    # the cyclic garbage collector has no garbage of firings to find.
     pref.inst = None  # type: ignore[assignment]
     if slot.is_context:
         agent._context_changed_at(slot.id)
@@ -270,7 +270,7 @@ def _with_justifications(fired: list[Instantiation],
     in soar_sml: sx then sy fire in a substate, the kernel traces '+ ... (justify3)',
     '+ ... [level 2] (sy)', '+ ... (justify1)', '+ ... [level 2] (sx)'; with snc fired
     for counts 0 then 2, justify7 and snc of count 2 come first, so (S1 ^count 3) gets the
-    older timetag). We asserted all the justifications first."""
+    older timetag)."""
     made: dict[int, list[Instantiation]] = {}
     for source, just in justifications:
         made.setdefault(id(source), []).append(just)

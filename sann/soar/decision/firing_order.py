@@ -1,16 +1,51 @@
-"""The order the kernel's Rete makes and loses matches in."""
+"""The order the kernel's Rete makes and loses matches in, which is the order rules fire
+and retract in.
+
+The kernel's Rete makes a match when the last of its WMEs enters (a batch of WME changes
+enters newest first, its removals after its additions), at a join whose place among its
+alpha memory's joins depends on when the join was last linked (a join whose parent memory
+empties is unlinked, and relinked at the tail when a token comes). ``rete.KernelOrder``
+keeps the kernel's node tree; this module turns a match into a sort key from it
+(``kernel_key``), sorts a batch of new matches (``batch_sorted``) and lost ones
+(``found_order``), and keeps the link records (``JoinLink``) up to date (``check_links``).
+"""
 
 from __future__ import annotations
 
-from ..instantiation import (
-    Instantiation,
-)
+from typing import Final
+
+from ..instantiation import Instantiation
 from ..memory import WME, Symbol
 from ..production import Condition, Const
 from ..rete import _wme_fits, equality_vars, prefix_token
-from .agent_state import AgentState, vkey
+from .agent_state import AgentState, JoinLink, vkey
 
-# IMPORTS
+# The fields of a join's *place*, the tuple ``rete.KernelOrder.add`` makes per written
+# positive condition (``Final``: mypyc compiles ``place[BORN]`` as ``place[2]``).
+#: the condition's alpha memory: 2 if its attribute is a constant, | 4 if its value is
+MASK: Final = 0
+#: the written indexes of the positive conditions above the condition's join
+BEFORE: Final = 1
+#: the timetag when the join was made (or relinked at init-soar: 0)
+BORN: Final = 2
+#: ``(join serial, path below it to the production)``: the order of one WME's joins
+PATH: Final = 3
+#: the other conditions of the production with the same alpha memory
+TWINS: Final = 4
+#: the condition's position in the kernel's order of the production's conditions
+POSITION: Final = 5
+#: the timetag when the production was loaded (its matches of older WMEs were made then)
+LOADED: Final = 6
+#: the path below the join cut at each positive join after it, with that join's written
+#: index in between (the order of the matches one activation makes, depth first)
+STEPS: Final = 7
+
+# The fields of a tied new match's key (``_tied_keys``): its ``first`` (two fields), then
+# ``kernel_key``'s after the newest WME.
+_KEY_POSITION: Final = 2
+_KEY_LINK: Final = 3
+_KEY_PATH: Final = 4
+
 
 def file_removals(agent: AgentState) -> None:
     """File the WMEs removed in the batch just taken with when the kernel's Rete took
@@ -75,17 +110,17 @@ def _unblock_rank(agent: AgentState, cond: Condition, bindings: dict[str, Symbol
 
 def _prefix_ranks(agent: AgentState, name: str, place: tuple, wmes: tuple) -> list[tuple | None]:
     """Per condition above the join of ``place`` in the kernel's order (its positive
-    conditions ``place[1]`` and the negated conditions among them): when the kernel's
+    conditions ``place[BEFORE]`` and the negated conditions among them): when the kernel's
     Rete took the WME in (``_entry_rank``), or, for a negation, last passed its token
     on (``_unblock_rank``; None: never, or a conjunctive negation)."""
     starts = agent._batch_starts
     ordered = agent._kernel_order.ordered(name)
-    if ordered is None or not any(kcond.negated for kcond in ordered[:place[5]]):
-        return [_entry_rank(wmes[j], starts) for j in place[1]]
+    if ordered is None or not any(kcond.negated for kcond in ordered[:place[POSITION]]):
+        return [_entry_rank(wmes[j], starts) for j in place[BEFORE]]
     ranks: list[tuple | None] = []
     bindings: dict[str, Symbol] = {}
     seen: set[int] = set()
-    for kcond in ordered[:place[5]]:
+    for kcond in ordered[:place[POSITION]]:
         if kcond.is_ncc:
             ranks.append(None)
         elif kcond.negated:
@@ -157,8 +192,8 @@ def _tied_keys(agent: AgentState, firsts: list[tuple], new: list, creators: list
     order); the matches made at one join (same creating WME, alpha memory and path)
     also get the order of their tokens (``_token_order``) and one relinking time, the
     earliest: the kernel relinks a join once, when its parent memory gets its first
-    token. Tokens are ordered only there: elsewhere the key is settled before
-    (measured by callgrind: most ties are not)."""
+    token. Tokens are ordered only there: most ties are settled before, and ordering
+    tokens is the dearest part of a key."""
     keys: list[tuple] = []
     joined: list[int] = []  # the keys that name a join
     for k in range(len(new)):
@@ -174,19 +209,20 @@ def _tied_keys(agent: AgentState, firsts: list[tuple], new: list, creators: list
         return keys
     if len(joined) == 2:  # the usual tie: two joins, settled without the token order
         one, two = keys[joined[0]], keys[joined[1]]
-        if (one[0] != two[0] or one[1] != two[1] or one[2] != two[2]
-                or one[4][0] != two[4][0]):
+        if (one[0] != two[0] or one[1] != two[1] or one[_KEY_POSITION] != two[_KEY_POSITION]
+                or one[_KEY_PATH][0] != two[_KEY_PATH][0]):
             return keys
     joins: dict[tuple, list[int]] = {}
     for k in joined:
         key = keys[k]
-        joins.setdefault((key[0], key[1], key[2], key[4][0]), []).append(k)
+        joins.setdefault((key[0], key[1], key[_KEY_POSITION], key[_KEY_PATH][0]),
+                         []).append(k)
     for members in joins.values():
         if len(members) > 1:
-            linked = min(keys[k][3] for k in members)
+            linked = min(keys[k][_KEY_LINK] for k in members)
             for k in members:
                 full = _kernel_key(agent, new[k], creators[k], True)
-                keys[k] = (*keys[k][:3], linked, *full[3:])
+                keys[k] = (*keys[k][:_KEY_LINK], linked, *full[_KEY_LINK:])
     return keys
 
 
@@ -269,39 +305,40 @@ def _kernel_key(agent: AgentState, match: object, creator: tuple | None = None,
     place = places.get(index)
     if place is None:
         return (newest,)
-    if newest <= place[6]:
+    if newest <= place[LOADED]:
         # Made when the production was loaded, in the order of loading (measured: of
         # two such rules with the same conditions, a new WME that blocks both retracts
         # the first loaded first, as it does the match made first at run time).
-        return (newest, -1, -place[3][-1])
+        return (newest, -1, -place[PATH][-1])
     wmes = match.wmes  # type: ignore[attr-defined]
-    if place[4]:  # the WME may be in other conditions too
+    if place[TWINS]:  # the WME may be in other conditions too
         wme = wmes[index]
-        for j in place[4]:
+        for j in place[TWINS]:
             if wmes[j] is wme:
                 other = places[j]
-                if other[0] > place[0] or (other[0] == place[0] and other[5] < place[5]):
+                if other[MASK] > place[MASK] or (other[MASK] == place[MASK]
+                                                and other[POSITION] < place[POSITION]):
                     place = other
     # When its join was made, or relinked (see KernelOrder): the entry of the latest
     # WME before it, in the order the kernel's Rete took the WMEs in (the negated
     # _entry_rank). Joins relinked by one WME's entry go in the order it activated
     # them: its (* ^attr *) memory before (* ^attr value), each's joins by path.
-    born: int = place[2]
+    born: int = place[BORN]
     starts = agent._batch_starts
     link_batch = agent._born_batches.get(born)
     if link_batch is None:
         link_batch = agent._born_batches[born] = _batch_of(starts, born)
-    own = tuple([wmes[j] for j in place[1]])
-    linked = _token_link(place[1], own, places, born, link_batch, starts)
+    own = tuple([wmes[j] for j in place[BEFORE]])
+    linked = _token_link(place[BEFORE], own, places, born, link_batch, starts)
     if linked[1] != _LATEST:  # else linked since it was made (its memory never emptied)
         linked = _join_link(agent, match.production.name,  # type: ignore[attr-defined]
-                                 place, places, born, link_batch, own, linked)
+                            place, places, born, link_batch, own, linked)
     if not tokens:
-        return (newest, place[0], linked, place[3])
-    return (newest, place[0], linked, (place[3][0],),
+        return (newest, place[MASK], linked, place[PATH])
+    name: str = match.production.name  # type: ignore[attr-defined]
+    return (newest, place[MASK], linked, (place[PATH][0],),
             *_token_order(wmes, place, agent._batch_starts,
-                          _prefix_ranks(agent, match.production.name,  # type: ignore[attr-defined]
-                                             place, wmes)))
+                          _prefix_ranks(agent, name, place, wmes)))
 
 
 def _join_link(agent: AgentState, name: str, place: tuple, places: dict[int, tuple], born: int,
@@ -314,38 +351,38 @@ def _join_link(agent: AgentState, name: str, place: tuple, places: dict[int, tup
     The memory's tokens are its prefix's partial matches in working memory; a record
     keeps the earliest of those seen while the memory is not emptied (``check_links``):
     a token seen there now was there since it was made. Only the matches' own tokens
-    are seen: looking all of the memory's tokens up when a record is made cost the
-    blocks planner a third more time, for one more watch-3 trace of 150 random
-    matching agents as the kernel's. Measured
-    in soar_sml, matching agent 8: op1x's ^stage join, linked by the first (X1 ^p 1)
-    token, keeps its place before op0x's while the ^p WMEs are replaced one by one. A
+    are seen, not all of the memory's when a record is made: that look-up is a search of
+    working memory per new record, dearer than the rest of the key together, for a
+    difference in very few programs' order. Measured in soar_sml, matching agent 8:
+    op1x's ^stage join, linked by the first (X1 ^p 1) token, keeps its place before
+    op0x's while the ^p WMEs are replaced one by one. A
     match whose token is gone (a retraction) was made in the link on record before
     this batch."""
-    serial: int = place[3][0]
+    serial: int = place[PATH][0]
     record = agent._join_links.get(serial)
     if not _all_there(own, agent._wm):  # the token is gone now
         before = agent._links_before.get(serial)
         if before is not None:
-            return before  # type: ignore[no-any-return]
-        if record is not None and record[4] != agent._collects:
-            return record[0]  # type: ignore[no-any-return]
+            return before
+        if record is not None and record.looked != agent._collects:
+            return record.link
         return own_link
     if record is not None:
-        seen: set[tuple] = record[5]
+        seen = record.seen
         if own not in seen:
             seen.add(own)
             _live_tokens(seen, agent._wm)
-            if own_link < record[0]:  # there now, so the memory was not empty since
-                agent._join_links[serial] = (own_link, *record[1:])
+            if own_link < record.link:  # there now, so the memory was not empty since
+                record.link = own_link
                 return own_link
-        return record[0]  # type: ignore[no-any-return]
+        return record.link
     starts = agent._batch_starts
     if own_link[0] == len(starts) and starts:  # made now, and no link on record
         older = _older_token(agent, name, place, starts[-1])
         if older is not None:
-            own, own_link = older, _token_link(place[1], older, places, born,
+            own, own_link = older, _token_link(place[BEFORE], older, places, born,
                                                born_batch, starts)
-    agent._join_links[serial] = (own_link, own, name, place, agent._collects, {own})
+    agent._join_links[serial] = JoinLink(own_link, own, name, place, agent._collects, {own})
     return own_link
 
 
@@ -366,16 +403,16 @@ def _older_token(agent: AgentState, name: str, place: tuple, start: int) -> tupl
         found = [wme for wme in agent._candidates(cond, bindings) if wme.timetag <= start]
         return found + removed if removed else found
 
-    return prefix_token(ordered, place[5], candidates, place[1])
+    return prefix_token(ordered, place[POSITION], candidates, place[BEFORE])
 
 
 def _memory_token(agent: AgentState, name: str, place: tuple) -> tuple | None:
     """A token of the kernel's memory above the join of ``place`` (see
-    ``_join_link``), as the WMEs of the conditions ``place[1]``; None if it is empty."""
+    ``_join_link``), as the WMEs of the conditions ``place[BEFORE]``; None if it is empty."""
     ordered = agent._kernel_order.ordered(name)
     if ordered is None:
         return None
-    return prefix_token(ordered, place[5], agent._candidates, place[1])
+    return prefix_token(ordered, place[POSITION], agent._candidates, place[BEFORE])
 
 
 def check_links(agent: AgentState) -> None:
@@ -389,21 +426,21 @@ def check_links(agent: AgentState) -> None:
     if agent._links_before:
         agent._links_before = {}
     gone = [serial for serial, record in agent._join_links.items()
-            if not _all_there(record[1], wm)]
+            if not _all_there(record.witness, wm)]
     for serial in gone:
         record = agent._join_links[serial]
-        agent._links_before[serial] = record[0]
-        seen = {token for token in record[5] if _all_there(token, wm)}
+        agent._links_before[serial] = record.link
+        seen = {token for token in record.seen if _all_there(token, wm)}
         if seen:
             witness = next(iter(seen))
         else:
-            found = _memory_token(agent, record[2], record[3])
+            found = _memory_token(agent, record.production, record.place)
             if found is None:
                 del agent._join_links[serial]
                 continue
             witness = found
             seen.add(witness)
-        agent._join_links[serial] = (record[0], witness, *record[2:5], seen)
+        record.witness, record.seen = witness, seen
 
 
 _LATEST = float("inf")  # a join made between two batches: after every WME of the first
@@ -433,10 +470,10 @@ def _entry_rank(wme: WME, starts: list[int]) -> tuple[int, int]:
 
 def _batch_of(starts: list[int], timetag: int) -> int:
     """``bisect_left(starts, timetag)``: the batch of a WME (see ``_entry_rank``), in
-    native integers (the bisect module compares Python objects, ten times slower), and
-    searched from both ends at once, doubling the steps, where the batches of the WMEs
-    asked about mostly are: the newest, and the structure made when the run began, whose
-    search from the end alone grew with the run (four batches a decision)."""
+    native integers (the bisect module compares Python objects), and searched from both
+    ends at once, doubling the steps, where the batches of the WMEs asked about mostly
+    are: the newest, and the structure made when the run began (a search from the end
+    alone would take longer the longer the run)."""
     high = len(starts) - 1
     if high < 0 or starts[high] < timetag:
         return high + 1
@@ -507,7 +544,7 @@ def _token_link(order: tuple[int, ...], token: tuple, places: dict[int, tuple], 
                 link_batch, link_time, link_place = batch, -timetag, places.get(j)
     if link_place is None:
         return (link_batch, _LATEST)
-    return (link_batch, link_time, link_place[0], link_place[3])
+    return (link_batch, link_time, link_place[MASK], link_place[PATH])
 
 
 def _live_tokens(seen: set[tuple], wm: dict[int, WME]) -> None:
@@ -579,7 +616,7 @@ def _token_order(wmes: tuple, place: tuple, starts: list[int], before: list[tupl
     measured in soar_sml, (S1 ^go n) below the shared ^obj join makes pb of X2, pa of X2,
     then pb of X1)."""
     order: list[tuple] = [_token_creation_key(before, -1)]
-    steps: tuple = place[7]
+    steps: tuple = place[STEPS]
     for k in range(len(steps)):
         step = steps[k]
         if k & 1:  # a join below: its alpha memory's WMEs are visited latest entered first

@@ -343,8 +343,8 @@ def _drop_slot(agent: AgentState, slot: Slot) -> None:
 
 def _move_values(wmes: dict[object, WME], removes: list[WME]) -> None:
     """Empty a slot's WMEs into ``removes``, newest first (a loop: mypyc's ``list.extend``
-    of a dict's values goes through the generic iterator protocol, several times slower
-    for the usual one WME)."""
+    of a dict's values goes through the generic iterator protocol, which costs more than
+    the loop for the usual one WME)."""
     if len(wmes) == 1:
         for wme in wmes.values():
             removes.append(wme)
