@@ -1,7 +1,9 @@
-"""The Soar agent: working memory, the decision cycle, trace, stats and print.
+"""The Soar agent: loading rules, running, stats, print and the io links.
 
-The cycle follows the Soar 9.6 kernel phase by phase (input, propose, decide, apply,
-output), including the details that change what users observe:
+``Agent`` is the public face of the decision cycle, whose phases are the modules of
+``sann.soar.decision`` (its ``__init__`` lists them). The cycle follows the Soar 9.6
+kernel phase by phase (input, propose, decide, apply, output), including the details that
+change what users observe:
 
 - elaboration cycles run level by level (the kernel's "waterfall"): each cycle fires the
   pending i-assertions and retractions of the highest goal that has any, and in the apply
@@ -34,6 +36,7 @@ from .instantiation import ProductionInfo
 from .io import InputHandle, OutputHandle
 from .memory import WME, Identifier
 from .production import Command, Production, duplicate_key, same_production
+from .rete import Rete
 from .rhs import FUNCTIONS, kernel_random
 from .syntax import parse
 from .trace import print_identifier
@@ -56,12 +59,6 @@ def _raise_gc_threshold() -> None:
         gc.set_threshold(GC_YOUNG_THRESHOLD, *threshold[1:])
 
 
-def _default_matcher() -> type:
-    from .rete import Rete
-
-    return Rete
-
-
 class Agent(AgentState):
     """A Soar agent. See the module docstring for the cycle; the README for the API."""
 
@@ -74,7 +71,7 @@ class Agent(AgentState):
         out: TextIO | None = None,
     ) -> None:
         _raise_gc_threshold()
-        super().__init__(name, matcher or _default_matcher(), out)
+        super().__init__(name, matcher or Rete, out)
         self.srand(seed)
         # duplicate_key -> names of the loaded productions with it (duplicates are refused)
         self._by_shape: dict[tuple, list[str]] = {}
