@@ -1,4 +1,13 @@
-"""The decision cycle's phases: input, propose, decide, apply, output."""
+"""The decision cycle's phases: input, propose, decide, apply, output.
+
+``run_phase`` runs the phase the agent is in. The propose and apply phases run
+elaboration cycles until quiescence, level by level as the kernel's "waterfall" does: each
+cycle fires the pending assertions of the highest goal that has any (in the apply phase,
+when a goal has no i-activity left, its o-assertions: a ``PE`` cycle), lower levels after
+it while they have assertions waiting, then the retractions, then the working-memory
+phase. The goal stack is checked for consistency when the active level moves down or a
+goal turns from i- to o-firing.
+"""
 
 from __future__ import annotations
 

@@ -1,4 +1,10 @@
-"""The decision phase: operator slots decided, impasses, consistency."""
+"""The decision phase: operator slots decided, impasses, and the stack's consistency.
+
+From the highest goal whose operator slot changed, the preference semantics choose an
+operator or name an impasse, which makes (or keeps) a substate. Between decisions, a
+decision that the current preferences no longer support is removed with everything below
+it (``consistent_through``).
+"""
 
 from __future__ import annotations
 

@@ -1,4 +1,9 @@
-"""Firing instantiations and asserting their preferences."""
+"""Firing instantiations, retracting them, and asserting their preferences.
+
+``fire`` runs a match's actions (interpreted, or compiled once the rule has fired
+``COMPILE_AFTER`` times), making an instantiation; a wave's preferences are then added to
+their slots in the kernel's order (``assert_preferences``), o-supported rejects first.
+"""
 
 from __future__ import annotations
 

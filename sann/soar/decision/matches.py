@@ -1,4 +1,9 @@
-"""The matcher's new and lost matches, queued at their goals."""
+"""The matcher's new and lost matches, queued at their goals.
+
+``collect_changes`` takes the matcher's changes after each batch of WME changes: new
+matches go to their goal's queue of i- or o-assertions in the order the kernel's Rete made
+them (``firing_order``), fired matches that stopped matching are scheduled for retraction.
+"""
 
 from __future__ import annotations
 

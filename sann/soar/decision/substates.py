@@ -1,4 +1,9 @@
-"""Substates: made for an impasse, removed with everything below them."""
+"""Substates: made for an impasse, removed with everything below them.
+
+A substate gets the standard augmentations of a state and its impasse's (``^attribute``,
+``^impasse``, ``^choices``, ``^item``...); removing it removes the substates below it, its
+instantiations' preferences, its architecture WMEs and its goal dependency set.
+"""
 
 from __future__ import annotations
 

@@ -1,4 +1,10 @@
-"""The working-memory phase: changed slots become WME changes."""
+"""The working-memory phase: changed slots become WME changes.
+
+A non-operator slot holds every acceptable value that is not rejected; an operator slot
+shows its acceptable values as ``(S ^operator O +)`` WMEs (the selection is the decision
+phase's). The slots are decided until none is changed, and the removals are traced in the
+kernel's order.
+"""
 
 from __future__ import annotations
 

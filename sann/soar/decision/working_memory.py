@@ -1,4 +1,10 @@
-"""Working memory's primitives: adding and removing WMEs."""
+"""Working memory's primitives: adding and removing WMEs.
+
+Every WME of a run is made by ``add_wme`` and leaves by ``remove_wme``, which keep the
+matcher, the indexes of working memory and the trace buffers up to date. A WME leaving may
+retract the justifications that tested it and remove the substates whose goal dependency
+set holds it; one coming may retract a justification whose negated condition it matches.
+"""
 
 from __future__ import annotations
 
