@@ -14,7 +14,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .decide import POLICIES
+from .decision.preference_semantics import POLICIES
 from .errors import SoarRuntimeError
 from .production import Command, SourceLocation
 

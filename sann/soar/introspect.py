@@ -12,8 +12,8 @@ import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
-from .decide import NONE as NO_IMPASSE
-from .decide import numeric_values, run_preference_semantics
+from .decision.preference_semantics import NONE as NO_IMPASSE
+from .decision.preference_semantics import numeric_values, run_preference_semantics
 from .errors import SoarRuntimeError
 from .matching.oracle import PartialMatch, join_condition, negation_matches, test_holds
 from .matching.reorder import KCond, format_kcond, kernel_conditions, positive_order, symbol_ages

@@ -6,13 +6,23 @@ SML changes; identifiers are named at once so that handles can be linked before 
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Union, cast
+from typing import Protocol, Union, cast
 
 from .errors import SoarRuntimeError
 from .memory import WME, Identifier, Symbol
 
-if TYPE_CHECKING:
-    from .agent import Agent
+
+class Agent(Protocol):
+    """What the handles use of the agent (``decision.agent_state.AgentState`` has it):
+    its working memory, its queue of input changes and the count of its init-soars."""
+
+    _wm: dict[int, WME]
+    _input_ops: list[WMEHandle]
+    _epoch: int
+
+    def _new_id(self, hint: str, level: int) -> Identifier: ...
+
+    def _augmentations(self, ident: Identifier) -> list[WME]: ...
 
 _MISSING = object()
 _new = object.__new__

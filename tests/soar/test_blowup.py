@@ -92,7 +92,7 @@ def test_link_records_stay_small_through_a_long_run() -> None:
     while not agent.halted and len(records) < 2100:
         agent.run(decisions=1)
         records.append(len(agent._join_links))
-        seen.append(sum(len(record[5]) for record in agent._join_links.values()))
+        seen.append(sum(len(record.seen) for record in agent._join_links.values()))
     assert agent.halted and agent.stats["decisions"] == 2048
     early, late = slice(0, 100), slice(1948, 2048)
     assert max(records[late]) <= max(records[early])

@@ -69,13 +69,13 @@ def test_interpreted_on_request() -> None:
 
 @pytest.mark.skipif(not BUILT, reason="no compiled engine here")
 def test_edited_module_runs_as_edited_not_compiled(tmp_path: Path) -> None:
-    """A copy of the package, built, with decide.py edited after the build: the engine
+    """A copy of the package, built, with decision/decide.py edited after the build: the engine
     runs from the sources (the edit shows), with a warning naming the module."""
     shutil.copytree(ROOT / "sann", tmp_path / "sann",
                     ignore=shutil.ignore_patterns("__pycache__"))
-    decide = tmp_path / "sann" / "soar" / "decide.py"
+    decide = tmp_path / "sann" / "soar" / "decision" / "decide.py"
     decide.write_text(decide.read_text() + "\nEDITED = True\n")
-    code = ("from sann.soar import compiled, decide; "
+    code = ("from sann.soar import compiled; from sann.soar.decision import decide; "
             "print(compiled.is_compiled(), getattr(decide, 'EDITED', False), decide.__file__)")
     run = _python(code, cwd=tmp_path)
     assert run.returncode == 0, run.stderr

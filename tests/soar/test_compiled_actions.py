@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 from differential.kernel import _add_our_inputs, read_spec
 
-import sann.soar.agent as agent_module
+import sann.soar.decision.firing as firing_module
 from sann.soar.agent import Agent
 from sann.soar.instantiation import compile_actions
 from sann.soar.production import CallAction, Const, FuncCall, MakeAction, Var
@@ -28,7 +28,7 @@ INPUT_OVERRIDES = {"hanoi.soar": (("disks", 6),)}
 
 
 def _run(path: Path, compile_after: int, monkeypatch: pytest.MonkeyPatch) -> tuple:
-    monkeypatch.setattr(agent_module, "COMPILE_AFTER", compile_after)
+    monkeypatch.setattr(firing_module, "COMPILE_AFTER", compile_after)
     spec = read_spec(path)
     out = io.StringIO()
     agent = Agent(out=out, seed=7)

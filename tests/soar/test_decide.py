@@ -6,7 +6,7 @@ import random
 
 import pytest
 
-from sann.soar import decide as dec
+from sann.soar.decision import preference_semantics as dec
 from sann.soar.goals import Goal
 from sann.soar.instantiation import Instantiation
 from sann.soar.memory import Identifier

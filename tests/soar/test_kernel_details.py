@@ -26,8 +26,8 @@ from pathlib import Path
 
 import pytest
 
-from sann.soar import agent as agent_module
 from sann.soar.agent import Agent
+from sann.soar.decision import firing as firing_module
 from sann.soar.errors import SoarError
 
 HEAD = "sp {{p (state <s> ^superstate nil) --> {}}}"
@@ -139,7 +139,7 @@ def test_the_first_example_prints_as_the_kernel(kernel) -> None:
 def test_compiled_actions_keep_the_kernels_order(
     kernel, monkeypatch: pytest.MonkeyPatch, compile_after: int
 ) -> None:
-    monkeypatch.setattr(agent_module, "COMPILE_AFTER", compile_after)
+    monkeypatch.setattr(firing_module, "COMPILE_AFTER", compile_after)
     rules = [
         "sp {propose (state <s> ^n <n> < 5) --> (<s> ^operator <o> +) (<o> ^name inc)}",
         "sp {inc (state <s> ^operator <o> ^n <n>) (<o> ^name inc) --> (write |[| <n>)"

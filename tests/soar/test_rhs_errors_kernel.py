@@ -20,8 +20,8 @@ from pathlib import Path
 
 import pytest
 
-from sann.soar import agent as agent_module
 from sann.soar.agent import Agent
+from sann.soar.decision import firing as firing_module
 
 HEAD = "sp {{p (state <s> ^superstate nil ^type <c> ^io <io>) --> {}}}"
 
@@ -211,7 +211,7 @@ def test_bad_arguments_the_kernel_takes_make_its_values(action: str, written: st
 def test_compiled_actions_print_what_interpreted_ones_do(monkeypatch: pytest.MonkeyPatch):
     runs = []
     for compile_after in (1, 10**9):
-        monkeypatch.setattr(agent_module, "COMPILE_AFTER", compile_after)
+        monkeypatch.setattr(firing_module, "COMPILE_AFTER", compile_after)
         runs.append(ours(split(COUNTING_AGENT), "run 125", watch=1))
     assert runs[0] == runs[1]
     assert runs[0][0].count("Error: RHS of action") == 2 * 120  # two per firing of apply
@@ -266,7 +266,7 @@ def test_errors_between_writes_and_the_trace_agree_with_the_kernel(kernel, watch
 def test_errors_of_compiled_actions_agree_with_the_kernel(
     kernel, monkeypatch: pytest.MonkeyPatch, compile_after: int
 ) -> None:
-    monkeypatch.setattr(agent_module, "COMPILE_AFTER", compile_after)
+    monkeypatch.setattr(firing_module, "COMPILE_AFTER", compile_after)
     rules = split(COUNTING_AGENT)
     printed = theirs(kernel, rules, "run 125", watch=1)
     assert ours(rules, "run 125", watch=1) == printed

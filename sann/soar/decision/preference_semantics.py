@@ -11,8 +11,8 @@ import math
 import random
 from dataclasses import dataclass
 
-from .memory import Identifier, Symbol
-from .preferences import (
+from ..memory import Identifier, Symbol
+from ..preferences import (
     ACCEPTABLE,
     BEST,
     BETTER,
@@ -26,7 +26,7 @@ from .preferences import (
     WORST,
     Slot,
 )
-from .rhs.rand import kernel_rand_int
+from ..rhs.rand import kernel_rand_int
 
 NONE = "none"
 TIE = "tie"
