@@ -33,14 +33,6 @@ from sann.soar.errors import SoarError
 HEAD = "sp {{p (state <s> ^superstate nil) --> {}}}"
 
 
-@pytest.fixture
-def kernel():
-    pytest.importorskip("soar_sml")
-    from differential import kernel
-
-    return kernel
-
-
 def ours(rules: list[str], commands: list[str]) -> list[str]:
     """What our engine prints for each command (after loading the rules at watch 0)."""
     out = io.StringIO()
