@@ -16,6 +16,9 @@ import pytest
 
 from sann.soar import Agent
 
+# Helper modules whose asserts are checks of a test: pytest explains their failures too.
+pytest.register_assert_rewrite("side_by_side")
+
 
 @pytest.fixture
 def kernel() -> ModuleType:

@@ -11,7 +11,7 @@ import io
 import re
 
 import pytest
-from test_agent_kernel import generated_agent
+from generated_agents import generated_agent
 
 from sann.soar import Agent
 

@@ -104,7 +104,7 @@ def test_relations_between_variables_as_the_kernel_runs_them(world: World) -> No
     """A test runs on the tested WME's value against the bound value: numbers with numbers
     (int and float alike), and between kinds ``<`` and ``<=`` hold, ``>`` and ``>=`` do
     not, as against a constant. (The agent first moves a test on a variable the kernel's
-    order binds later into that variable's condition, inverted: test_agent_kernel.)"""
+    order binds later into that variable's condition, inverted: test_decision_counts_and_traces.)"""
     other = world.new("A")
     world.add(world.s1, "base", 5)
     for value in (3, 5, 7.5, "abc", other):
@@ -511,7 +511,7 @@ def test_duplicate_production_name_is_an_error(world: World) -> None:
 # ----- semantic checks ------------------------------------------------------------------------
 
 
-# What the kernel refuses (measured in soar_sml 9.6; tests/soar/test_load_checks_kernel.py
+# What the kernel refuses (measured in soar_sml 9.6; tests/soar/test_load_checks.py
 # compares many more shapes with the kernel itself).
 @pytest.mark.parametrize("text, message", [
     ("-(state <s> ^a b)", "no positive condition"),

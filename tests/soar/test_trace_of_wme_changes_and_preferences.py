@@ -24,7 +24,7 @@ import io
 from pathlib import Path
 
 import pytest
-from test_agent_kernel import generated_agent, generated_substate_agent
+from generated_agents import generated_agent, generated_substate_agent
 
 from sann.soar import Agent
 
