@@ -155,7 +155,7 @@ def _decision_lines(trace: str) -> list[str]:
 
 
 @pytest.mark.parametrize("name", sorted(AGENTS))
-def test_agrees_with_kernel(name: str, tmp_path) -> None:
+def test_focused_agents_count_and_trace_as_the_kernel(name: str, tmp_path) -> None:
     theirs, their_trace = kernel_run(AGENTS[name], 15, tmp_path)
     ours, our_trace = our_run(AGENTS[name], 15)
     assert ours == theirs

@@ -118,7 +118,7 @@ SHAPES = [
 
 
 @pytest.mark.parametrize(("body", "loads"), SHAPES)
-def test_measured_shapes(body: str, loads: bool) -> None:
+def test_measured_shapes_load_as_in_the_kernel(body: str, loads: bool) -> None:
     text = f"sp {{shape\n{body}}}"
     assert kernel_load(text)[0] == loads
     assert assert_same_verdict(text, "shape") == loads

@@ -83,7 +83,7 @@ def test_variable_attribute_binds(world: World) -> None:
     assert sorted(b["a"] for b in world.bindings()) == ["color", "shade"]
 
 
-def test_disjunction(world: World) -> None:
+def test_a_disjunction_matches_only_its_listed_values(world: World) -> None:
     for value in ("red", "blue", "green", 1.0):
         world.add(world.s1, "color", value)
     world.rule("(state <s> ^color {<c> << red green 1 >>})")
@@ -141,7 +141,7 @@ def test_not_equal_and_same_type(world: World) -> None:
     assert world.values("same-const", "x") == [1.0]
 
 
-def test_smem_link_tests(world: World) -> None:
+def test_an_unlinked_identifier_fails_at_and_passes_not_at(world: World) -> None:
     world.add(world.s1, "v", world.new("L"))
     world.rule("(state <s> ^v {<x> @ <s>})", "at")
     world.rule("(state <s> ^v {<x> !@ <s>})", "not-at")
@@ -665,7 +665,7 @@ def test_removing_a_wme_touches_only_its_tokens() -> None:
     assert {id(m) for m in rete.matches("r")} == before
 
 
-def test_symbol_order() -> None:
+def test_symbols_order_identifiers_then_numbers_then_strings() -> None:
     b1, n1, n2 = Identifier("B", 1), Identifier("N", 1), Identifier("N", 2)
     ordered = [b1, n1, n2, -3, 1, 2.5, 10, "10", "abc"]
     for i, a in enumerate(ordered):
