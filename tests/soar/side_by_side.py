@@ -1,10 +1,14 @@
-"""A list of commands run in both engines after the same rules: what each prints for each
-command, and the check that the texts agree. The action-order and trace-of-phases tests
-compare whole outputs this way."""
+"""The same rules run in both engines, what each prints captured whole: per command of a list
+(``ours`` / ``theirs``, and ``same`` that checks them against each other), or the trace of one
+run at a watch level (``kernel_trace`` / ``our_trace``). The kernel side is a fresh agent in
+the process's one kernel (``differential.kernel``)."""
 
 from __future__ import annotations
 
 import io
+from pathlib import Path
+
+from differential.kernel import Inputs, KernelAgent, _add_our_inputs
 
 from sann.soar import Agent
 
@@ -49,3 +53,35 @@ def same(kernel, rules: list[str], commands: list[str]) -> list[str]:
         elif not command.startswith("watch"):  # the kernel says what it watches now
             assert mine.rstrip("\n") == their.rstrip("\n"), command
     return expected
+
+
+def kernel_trace(rules: list[str], path: Path | None, level: int, decisions: int,
+                 inputs: Inputs = ()) -> str:
+    """The kernel's print output of ``run decisions`` at ``watch level``."""
+    with KernelAgent() as ka:
+        if path is not None:
+            ka.cmd(f"source {{{path}}}")
+        for rule in rules:
+            ka.cmd(rule)
+        ka.cmd(f"watch {level}")
+        ka.take_log()
+        ka.add_inputs(inputs)
+        ka.cmd(f"run {decisions}")
+        return ka.take_log()
+
+
+def our_trace(rules: list[str], path: Path | None, level: int, decisions: int,
+              inputs: Inputs = ()) -> str:
+    """Our engine's output of the same run (what loading printed left out)."""
+    out = io.StringIO()
+    agent = Agent(out=out)
+    if path is not None:
+        agent.source(str(path))
+    for rule in rules:
+        agent.load(rule)
+    agent.trace(level)
+    out.seek(0)
+    out.truncate()
+    _add_our_inputs(agent, inputs)
+    agent.run(decisions=decisions)
+    return out.getvalue()
