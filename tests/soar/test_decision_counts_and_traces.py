@@ -8,11 +8,12 @@ import io
 import re
 
 import pytest
+from differential.kernel import KernelAgent
 from generated_agents import generated_agent, generated_substate_agent
 
 from sann.soar import Agent
 
-sml = pytest.importorskip("soar_sml")
+pytest.importorskip("soar_sml")
 
 AGENTS = {
     "results-and-consistency": """
@@ -109,32 +110,13 @@ sp {rc (state <s> ^operator.name go) --> (write |a3 |) (<s> ^also yes)}
 def kernel_run(text: str, decisions: int, tmp_path) -> tuple[dict, str]:
     path = tmp_path / "agent.soar"
     path.write_text(text)
-    kernel = sml.Kernel.CreateKernelInCurrentThread(True, 0)
-    try:
-        agent = kernel.CreateAgent("probe")
-        log: list[str] = []
-        agent.RegisterForPrintEvent(
-            sml.smlEVENT_PRINT, lambda mid, ud, ag, msg: log.append(msg), None
-        )
-        agent.ExecuteCommandLine(f"source {path}")
-        agent.ExecuteCommandLine("watch 1")
-        log.clear()
-        agent.ExecuteCommandLine(f"run {decisions}")
-        stats = agent.ExecuteCommandLine("stats")
-    finally:
-        kernel.Shutdown()
-
-    def grab(pattern: str) -> int:
-        return int(re.search(pattern, stats).group(1))  # type: ignore[union-attr]
-
-    figures = {
-        "decisions": grab(r"(\d+) decisions"),
-        "elaboration_cycles": grab(r"(\d+) elaboration cycles"),
-        "production_firings": grab(r"(\d+) production firings"),
-        "wme_changes": grab(r"(\d+) wme changes"),
-        "wm_size": grab(r"WM size: (\d+) current"),
-    }
-    return figures, "".join(log)
+    with KernelAgent() as ka:
+        ka.cmd(f"source {{{path}}}")
+        ka.cmd("watch 1")
+        ka.take_log()
+        ka.agent.ExecuteCommandLine(f"run {decisions}")
+        figures = ka.stats()
+        return figures, ka.take_log()
 
 
 def our_run(text: str, decisions: int) -> tuple[dict, str]:
@@ -190,15 +172,10 @@ WIDE = (
 def test_print_wraps_by_the_column_the_trace_left_like_the_kernel() -> None:
     """The kernel counts columns on its output: after ``run 1`` its trace line has no
     newline, so the next print wraps its first line earlier; the print after it does not."""
-    kernel = sml.Kernel.CreateKernelInCurrentThread(True, 0)
-    try:
-        theirs_agent = kernel.CreateAgent("wide")
-        kernel.ExecuteCommandLine(WIDE, "wide")
-        kernel.ExecuteCommandLine("run 1", "wide")
-        theirs = [kernel.ExecuteCommandLine("print X1", "wide") for _ in range(2)]
-        kernel.DestroyAgent(theirs_agent)
-    finally:
-        kernel.Shutdown()
+    with KernelAgent() as ka:
+        ka.agent.ExecuteCommandLine(WIDE)
+        ka.agent.ExecuteCommandLine("run 1")
+        theirs = [ka.agent.ExecuteCommandLine("print X1") for _ in range(2)]
     agent = Agent(out=io.StringIO())
     agent.trace(1)  # the kernel's default watch level
     agent.load(WIDE)
@@ -210,15 +187,10 @@ def test_print_wraps_by_the_column_the_trace_left_like_the_kernel() -> None:
 
 @pytest.mark.parametrize("before", [[], ["print s1", "init-soar"], ["print s1"]])
 def test_first_print_of_a_new_or_reinitialised_agent_wraps_like_the_kernel(before) -> None:
-    kernel = sml.Kernel.CreateKernelInCurrentThread(True, 0)
-    try:
-        theirs_agent = kernel.CreateAgent("fresh")
+    with KernelAgent() as ka:
         for line in before:
-            kernel.ExecuteCommandLine(line, "fresh")
-        theirs = kernel.ExecuteCommandLine("print s1", "fresh")
-        kernel.DestroyAgent(theirs_agent)
-    finally:
-        kernel.Shutdown()
+            ka.agent.ExecuteCommandLine(line)
+        theirs = ka.agent.ExecuteCommandLine("print s1")
     agent = Agent(out=io.StringIO())
     agent.trace(1)  # the kernel's default watch level: init-soar traces the new S1
     for line in before:
@@ -231,20 +203,13 @@ def test_init_soar_traces_and_answers_like_the_kernel(level) -> None:
     """init-soar's trace of the new top state at every watch level, its answer, and the
     column the next print wraps by (watch 0 leaves the column where the run left it)."""
     rule = "sp {a (state <s> ^superstate nil) --> (<s> ^x 1) (write |wide enough to wrap|)}"
-    kernel = sml.Kernel.CreateKernelInCurrentThread(True, 0)
-    log: list[str] = []
-    try:
-        theirs_agent = kernel.CreateAgent("again")
-        theirs_agent.RegisterForPrintEvent(sml.smlEVENT_PRINT, lambda *a: log.append(a[-1]), None)
+    with KernelAgent() as ka:
         for line in (rule, f"watch {level}", "run 1"):
-            kernel.ExecuteCommandLine(line, "again")
-        log.clear()
-        answer = kernel.ExecuteCommandLine("init-soar", "again")
-        theirs = "".join(log) + answer
-        theirs_print = kernel.ExecuteCommandLine("print s1", "again")
-        kernel.DestroyAgent(theirs_agent)
-    finally:
-        kernel.Shutdown()
+            ka.agent.ExecuteCommandLine(line)
+        ka.take_log()
+        answer = ka.agent.ExecuteCommandLine("init-soar")
+        theirs = ka.take_log() + answer
+        theirs_print = ka.agent.ExecuteCommandLine("print s1")
     out = io.StringIO()
     agent = Agent(out=out)
     agent.trace(1)
