@@ -3,8 +3,9 @@ Soar kernel (``soar_sml``, in-process).
 
 A driver describes its input-link as :data:`InputItem` s, ``("cap", 8)`` for a constant and
 ``("block", [("id", 3), ("x", 1.5), ...])`` for an identifier with its attributes, and reads its
-plans back as the fields of every ``^sequence`` on the output-link. Both backends put the items
-on in the order given, so a driver that lists them alike gives both engines the same timetags.
+plans back as the values of the output-link's ``^sequence`` WMEs (:data:`OutputValue`: the text
+of a constant, the attributes of an identifier). Both backends put the items on in the order
+given, so a driver that lists them alike gives both engines the same timetags.
 
 The backends differ where the engines do. Our ``init()`` clears the whole working memory, input
 included, so :meth:`SannBackend.run` re-initialises and then puts everything on. The kernel's
@@ -21,11 +22,23 @@ from pathlib import Path
 from typing import Any
 
 from sann.soar import Agent
+from sann.soar.io import OutputHandle
 
 InputValue = int | float | str
 #: One WME on the input-link: a constant, or an identifier with its (attribute, constant) pairs
 #: (an attribute given several times makes a multi-valued attribute).
 InputItem = tuple[str, InputValue | Sequence[tuple[str, InputValue]]]
+#: One ``^sequence`` of the output-link: a constant's text, or an identifier's attributes and
+#: their values' texts.
+OutputValue = str | dict[str, str]
+
+
+def sequence_fields(value: OutputValue) -> dict[str, str]:
+    """The attributes of an output sequence made as an identifier (a constant is an error of
+    the rule file: the driver expected fields)."""
+    if isinstance(value, str):
+        raise RuntimeError(f"the rules wrote ^sequence {value!r}: an identifier was expected")
+    return value
 
 
 class SannBackend:
@@ -35,12 +48,13 @@ class SannBackend:
         #: What the agent printed in its last run (its `write` output and the halt message):
         #: kept for a reader who asks, never sent to standard output, which would flood the book.
         self.transcript = io.StringIO()
-        self.agent: Agent | None = Agent(out=self.transcript)
-        self.agent.source(str(rules))
+        agent = Agent(out=self.transcript)
+        agent.source(str(rules))
+        self.agent: Agent | None = agent
 
-    def run(self, items: Sequence[InputItem], fields: Sequence[str]) -> list[tuple[str, ...]]:
-        """Initialise, put ``items`` on the input-link, run until halt: the ``fields`` of each
-        output sequence as strings. An error the rules raised (a failed RHS call) is raised."""
+    def run(self, items: Sequence[InputItem], seed: int | None = None) -> list[OutputValue]:
+        """Initialise (and ``srand seed``), put ``items`` on the input-link, run until halt:
+        the output sequences. An error the rules raised (a failed RHS call) is raised."""
         agent = self.agent
         if agent is None:
             raise ValueError("this backend is closed")
@@ -48,6 +62,8 @@ class SannBackend:
         self.transcript.seek(0)
         self.transcript.truncate()
         errors = len(agent.errors)
+        if seed is not None:
+            agent.srand(seed)
         il = agent.input_link
         for attr, value in items:
             if isinstance(value, int | float | str):
@@ -59,12 +75,9 @@ class SannBackend:
         agent.run()
         if len(agent.errors) > errors:
             raise RuntimeError("the planning rules failed: " + "; ".join(agent.errors[errors:]))
-        out = []
-        for attr, q in agent.output_link.children():
-            if attr == "sequence":
-                kv = dict(q.children())
-                out.append(tuple(str(kv[f]) for f in fields))
-        return out
+        return [{str(a): str(v) for a, v in value.children()}
+                if isinstance(value, OutputHandle) else str(value)
+                for attr, value in agent.output_link.children() if attr == "sequence"]
 
     def close(self) -> None:
         self.agent = None
@@ -116,28 +129,35 @@ class SmlBackend:
             self.agent.DestroyWME(w)
         self.agent.Commit()
 
-    def run(self, items: Sequence[InputItem], fields: Sequence[str]) -> list[tuple[str, ...]]:
-        """Put ``items`` beside what is on the input-link already, run until halt, take them
-        off and ``init-soar``: the ``fields`` of each output sequence as strings."""
+    def run(self, items: Sequence[InputItem], seed: int | None = None) -> list[OutputValue]:
+        """Put ``items`` beside what is on the input-link already, ``srand seed``, run until
+        halt, take the items off and ``init-soar``: the output sequences."""
         top = self.put(items)
         self.agent.Commit()
+        if seed is not None:
+            self.agent.ExecuteCommandLine(f"srand {seed}")
         self.agent.RunSelf(100_000)
-        out = self.output_sequences(fields)
+        out = self.output_sequences()
         self.remove(top)
         self.agent.ExecuteCommandLine("init-soar")
         return out
 
-    def output_sequences(self, fields: Sequence[str]) -> list[tuple[str, ...]]:
-        """The ``fields`` of every ``^sequence`` on the output-link, as strings."""
-        out: list[tuple[str, ...]] = []
+    def output_sequences(self) -> list[OutputValue]:
+        """The values of the output-link's ``^sequence`` WMEs."""
+        out: list[OutputValue] = []
         ol = self.agent.GetOutputLink()
         if ol is None:
             return out
         for i in range(ol.GetNumberChildren()):
             child = ol.GetChild(i)
-            if child.GetAttribute() == "sequence":
-                q = child.ConvertToIdentifier()
-                out.append(tuple(q.GetParameterValue(f) for f in fields))
+            if child.GetAttribute() != "sequence":
+                continue
+            if not child.IsIdentifier():
+                out.append(child.GetValueAsString())
+                continue
+            q = child.ConvertToIdentifier()
+            out.append({q.GetChild(j).GetAttribute(): q.GetChild(j).GetValueAsString()
+                        for j in range(q.GetNumberChildren())})
         return out
 
     def close(self) -> None:

@@ -41,7 +41,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from sann.tasks.backends import InputItem, SannBackend, SmlBackend
+from sann.tasks.backends import InputItem, SannBackend, SmlBackend, sequence_fields
 from sann.vision.camera import Camera, default_camera, make_pose
 from sann.vision.detect import MAX_DETECTIONS, DetectConfig, Detection
 
@@ -184,8 +184,8 @@ class CupPlanner:
         if bad:
             raise ValueError(f"targets {bad} are not rows of the scene (0..{scene.n - 1})")
         items = _cup_items(scene, self.cap, sorted(set(wanted)))
-        found = ([CupSequence(int(t), int(t_o), order) for t, t_o, order
-                  in self._backend.run(items, ("target", "t-o", "order"))] if wanted else [])
+        found = ([CupSequence(int(s["target"]), int(s["t-o"]), s["order"])
+                  for s in map(sequence_fields, self._backend.run(items))] if wanted else [])
         result: dict[int, list[CupSequence]] = {t: [] for t in wanted}
         for seq in found:
             result[seq.target].append(seq)

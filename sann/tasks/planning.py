@@ -32,7 +32,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .backends import InputItem, SannBackend, SmlBackend
+from .backends import InputItem, OutputValue, SannBackend, SmlBackend, sequence_fields
 from .blocks import FEATURE_NAMES, NAMES, SIDES, BlockWorldParams, Scene, features
 
 ENGINES = ("sann", "soar_sml")
@@ -132,11 +132,11 @@ def _scene_items(rows: list[tuple]) -> list[InputItem]:
             for bid, name, size, x, y, z, rel, faces in rows]
 
 
-def _plans(found: list[tuple[str, ...]]) -> list[PlanSequence]:
-    return [PlanSequence(int(t), pair, int(t_o), order) for t, pair, t_o, order in found]
+def _plans(found: list[OutputValue]) -> list[PlanSequence]:
+    return [PlanSequence(int(s["target"]), s["pair"], int(s["t-o"]), s["order"])
+            for s in map(sequence_fields, found)]
 
 
-_FIELDS = ("target", "pair", "t-o", "order")
 #: Targets per run when the config says none: all in ours; in the kernel a few, as it slows
 #: down with many live plans in one run (see the module's docstring).
 _DEFAULT_GROUP = {"sann": len(NAMES), "soar_sml": 3}
@@ -176,11 +176,11 @@ class Planner:
             # The scene stays on the input-link while groups of targets are planned.
             scene = self._backend.put(top + _scene_items(rows))
             for group in groups:
-                found += _plans(self._backend.run(group, _FIELDS))
+                found += _plans(self._backend.run(group))
             self._backend.remove(scene)
         else:
             for group in groups:
-                found += _plans(self._backend.run(top + group + _scene_items(rows), _FIELDS))
+                found += _plans(self._backend.run(top + group + _scene_items(rows)))
         result: dict[int, list[PlanSequence]] = {t: [] for t in wanted}
         for seq in found:
             result[seq.target].append(seq)
