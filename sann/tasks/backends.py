@@ -19,10 +19,10 @@ import io
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from sann.soar import Agent
-from sann.soar.io import OutputHandle
+if TYPE_CHECKING:
+    from sann.soar import Agent
 
 InputValue = int | float | str
 #: One WME on the input-link: a constant, or an identifier with its (attribute, constant) pairs
@@ -45,6 +45,10 @@ class SannBackend:
     """Our engine: a fresh working memory per run via ``agent.init()``."""
 
     def __init__(self, rules: Path) -> None:
+        # Imported here: a module that imports a driver for its data only (the cups dataset
+        # of the vision chapters) does not load the engine, nor depend on its sources.
+        from sann.soar import Agent
+
         #: What the agent printed in its last run (its `write` output and the halt message):
         #: kept for a reader who asks, never sent to standard output, which would flood the book.
         self.transcript = io.StringIO()
@@ -75,6 +79,8 @@ class SannBackend:
         agent.run()
         if len(agent.errors) > errors:
             raise RuntimeError("the planning rules failed: " + "; ".join(agent.errors[errors:]))
+        from sann.soar.io import OutputHandle
+
         return [{str(a): str(v) for a, v in value.children()}
                 if isinstance(value, OutputHandle) else str(value)
                 for attr, value in agent.output_link.children() if attr == "sequence"]
