@@ -68,6 +68,7 @@ lint: $(STAMP)
 
 bench: $(STAMP) $(COMPILED)
 	$(PY) benchmarks/engine.py
+	$(PY) benchmarks/parsing.py
 	$(PY) benchmarks/blocks.py
 	$(PY) benchmarks/vision.py
 

@@ -15,7 +15,7 @@ ROW = [
 ]
 
 
-def test_eq3() -> None:
+def test_eq3_halves_per_step_and_refuses_a_bad_t_o() -> None:
     assert sequence_probability(1) == 1.0
     assert sequence_probability(2) == 0.5
     assert sequence_probability(4) == 0.125
@@ -25,7 +25,7 @@ def test_eq3() -> None:
             sequence_probability(bad)
 
 
-def test_eq2() -> None:
+def test_eq2_sums_the_probabilities_of_the_sequences() -> None:
     assert logical_item([]) == 0.0
     assert logical_item([1]) == 1.0
     assert logical_item([3, 3, 2]) == 1.0

@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import ast
 import hashlib
-import io
 import json
 import os
 import time
@@ -43,7 +42,7 @@ from typing import NamedTuple
 import numpy as np
 
 from sann import RULES
-from sann.tasks.sml_agent import SmlAgent
+from sann.tasks.backends import InputItem, SannBackend, SmlBackend, sequence_fields
 from sann.vision.camera import Camera, default_camera, make_pose
 from sann.vision.detect import MAX_DETECTIONS, DetectConfig, Detection
 
@@ -144,96 +143,19 @@ class CupSequence(NamedTuple):
     order: str
 
 
-def _cup_items(scene: CupScene) -> list[dict]:
-    """Per cup the input-link attributes (see the header of rules/cups.soar)."""
-    items = []
+def _cup_items(scene: CupScene, cap: int, targets: Sequence[int]) -> list[InputItem]:
+    """The input-link of one frame (see the header of rules/cups.soar)."""
+    items: list[InputItem] = [("cap", cap), *(("target", int(t)) for t in targets)]
     for i in range(scene.n):
         p, a = scene.positions[i], scene.axes[i]
-        items.append({
-            "index": i, "name": CUP_NAMES[i], "score": float(scene.scores[i]),
-            "x": float(p[0]), "y": float(p[1]), "z": float(p[2]),
-            "ax": float(a[0]), "ay": float(a[1]), "az": float(a[2]),
-            "over": [int(k) for k in np.flatnonzero(scene.over[i])],
-            "on": [int(k) for k in np.flatnonzero(scene.on[i])],
-        })
+        items.append(("cup", [
+            ("index", i), ("name", CUP_NAMES[i]), ("score", float(scene.scores[i])),
+            ("x", float(p[0])), ("y", float(p[1])), ("z", float(p[2])),
+            ("ax", float(a[0])), ("ay", float(a[1])), ("az", float(a[2])),
+            *(("over", int(k)) for k in np.flatnonzero(scene.over[i])),
+            *(("on", int(k)) for k in np.flatnonzero(scene.on[i])),
+        ]))
     return items
-
-
-class _SannBackend:
-    """Our engine: a fresh working memory per run via ``agent.init()``."""
-
-    def __init__(self, rules: Path) -> None:
-        from sann.soar.agent import Agent
-
-        #: What the agent printed in its last run (its `write` output and the halt message):
-        #: kept for a reader who asks, never sent to standard output, which would flood the book.
-        self.transcript = io.StringIO()
-        self.agent = Agent(out=self.transcript)
-        self.agent.source(str(rules))
-
-    def run(self, scene: CupScene, targets: Sequence[int], cap: int) -> list[CupSequence]:
-        agent = self.agent
-        agent.init()
-        self.transcript.seek(0)
-        self.transcript.truncate()
-        errors = len(agent.errors)
-        il = agent.input_link
-        il.add("cap", cap)
-        for t in targets:
-            il.add("target", int(t))
-        for item in _cup_items(scene):
-            c = il.add("cup")
-            for attr, value in item.items():
-                for v in value if isinstance(value, list) else [value]:
-                    c.add(attr, v)
-        agent.run()
-        if len(agent.errors) > errors:
-            raise RuntimeError("the planning rules failed: " + "; ".join(agent.errors[errors:]))
-        out = []
-        for attr, q in agent.output_link.children():
-            if attr == "sequence":
-                kv = dict(q.children())
-                out.append(CupSequence(int(kv["target"]), int(kv["t-o"]), str(kv["order"])))
-        return out
-
-    def close(self) -> None:
-        self.agent = None
-
-
-class _SmlBackend(SmlAgent):
-    """The real Soar kernel through soar_sml; ``init-soar`` between frames."""
-
-    def __init__(self, rules: Path) -> None:
-        super().__init__(rules, "cups")
-
-    def _add(self, parent, attr: str, value: object):
-        a = self.agent
-        if isinstance(value, str):
-            return a.CreateStringWME(parent, attr, value)
-        if isinstance(value, int):
-            return a.CreateIntWME(parent, attr, value)
-        return a.CreateFloatWME(parent, attr, float(value))
-
-    def run(self, scene: CupScene, targets: Sequence[int], cap: int) -> list[CupSequence]:
-        a = self.agent
-        il = a.GetInputLink()
-        top = [a.CreateIntWME(il, "cap", cap)]
-        top += [a.CreateIntWME(il, "target", int(t)) for t in targets]
-        for item in _cup_items(scene):
-            c = a.CreateIdWME(il, "cup")
-            top.append(c)
-            for attr, value in item.items():
-                for v in value if isinstance(value, list) else [value]:
-                    self._add(c, attr, v)
-        a.Commit()
-        a.RunSelf(100_000)
-        out = [CupSequence(int(t), int(t_o), order) for t, t_o, order
-               in self.output_sequences(("target", "t-o", "order"))]
-        for w in top:
-            a.DestroyWME(w)
-        a.Commit()
-        a.ExecuteCommandLine("init-soar")
-        return out
 
 
 class CupPlanner:
@@ -253,7 +175,8 @@ class CupPlanner:
         if not Path(rules).is_file():
             raise ValueError(f"rules file not found: {rules}")
         self.engine, self.rules, self.cap = engine, Path(rules), cap
-        self._backend = _SannBackend(self.rules) if engine == "sann" else _SmlBackend(self.rules)
+        self._backend = (SannBackend(self.rules) if engine == "sann"
+                         else SmlBackend(self.rules, "cups"))
 
     def plan(self, scene: CupScene, targets: Iterable[int] | None = None
              ) -> dict[int, list[CupSequence]]:
@@ -261,7 +184,9 @@ class CupPlanner:
         bad = sorted({t for t in wanted if not 0 <= t < scene.n})
         if bad:
             raise ValueError(f"targets {bad} are not rows of the scene (0..{scene.n - 1})")
-        found = self._backend.run(scene, sorted(set(wanted)), self.cap) if wanted else []
+        items = _cup_items(scene, self.cap, sorted(set(wanted)))
+        found = ([CupSequence(int(s["target"]), int(s["t-o"]), s["order"])
+                  for s in map(sequence_fields, self._backend.run(items))] if wanted else [])
         result: dict[int, list[CupSequence]] = {t: [] for t in wanted}
         for seq in found:
             result[seq.target].append(seq)

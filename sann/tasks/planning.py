@@ -23,10 +23,9 @@ there (``targets_per_run``; the scene stays on the input-link meanwhile).
 
 from __future__ import annotations
 
-import io
 import math
 import os
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
@@ -34,8 +33,8 @@ from typing import NamedTuple
 import numpy as np
 
 from sann import RULES
-from sann.tasks.sml_agent import SmlAgent
 
+from .backends import InputItem, OutputValue, SannBackend, SmlBackend, sequence_fields
 from .blocks import FEATURE_NAMES, NAMES, SIDES, BlockWorldParams, Scene, features
 
 ENGINES = ("sann", "soar_sml")
@@ -128,104 +127,21 @@ def _geometry(centre: np.ndarray, size: int, clearance: float, margin: float
     return out + [("zin-lo", float(lo[2] + Z_TOLERANCE)), ("zin-hi", float(hi[2] - Z_TOLERANCE))]
 
 
-class _SannBackend:
-    """Our engine: a fresh working memory per run via ``agent.init()``."""
-
-    default_group = 26
-
-    def __init__(self, rules: Path) -> None:
-        from sann.soar.agent import Agent
-
-        #: What the agent printed in its last run (its `write` output and the halt message):
-        #: kept for a reader who asks, never sent to standard output, which would flood the book.
-        self.transcript = io.StringIO()
-        self.agent = Agent(out=self.transcript)
-        self.agent.source(str(rules))
-
-    def run(self, rows: list[tuple], targets: Sequence[int], config: PlannerConfig
-            ) -> list[PlanSequence]:
-        agent = self.agent
-        agent.init()
-        self.transcript.seek(0)
-        self.transcript.truncate()
-        errors = len(agent.errors)
-        il = agent.input_link
-        il.add("cap", config.cap)
-        il.add("horizon", config.horizon)
-        for t in targets:
-            il.add("target", int(t))
-        for bid, name, size, x, y, z, rel, faces in rows:
-            b = il.add("block")
-            b.add("id", bid)
-            b.add("name", name)
-            b.add("size", size)
-            b.add("x", x)
-            b.add("y", y)
-            b.add("z", z)
-            for side, other in rel:
-                b.add(side, other)
-            for face, value in faces:
-                b.add(face, value)
-        agent.run()
-        if len(agent.errors) > errors:
-            raise RuntimeError("the planning rules failed: " + "; ".join(agent.errors[errors:]))
-        out = []
-        for attr, q in agent.output_link.children():
-            if attr == "sequence":
-                kv = dict(q.children())
-                out.append(PlanSequence(int(kv["target"]), str(kv["pair"]), int(kv["t-o"]),
-                                        str(kv["order"])))
-        return out
-
-    def close(self) -> None:
-        self.agent = None
+def _scene_items(rows: list[tuple]) -> list[InputItem]:
+    """The blocks of :func:`_block_rows` as input-link items."""
+    return [("block", [("id", bid), ("name", name), ("size", size), ("x", x), ("y", y),
+                       ("z", z), *rel, *faces])
+            for bid, name, size, x, y, z, rel, faces in rows]
 
 
-class _SmlBackend(SmlAgent):
-    """The real Soar kernel through soar_sml: the scene stays on the input-link while groups of
-    targets are planned; ``init-soar`` between groups (SML re-sends the input-link)."""
+def _plans(found: list[OutputValue]) -> list[PlanSequence]:
+    return [PlanSequence(int(s["target"]), s["pair"], int(s["t-o"]), s["order"])
+            for s in map(sequence_fields, found)]
 
-    default_group = 3
 
-    def __init__(self, rules: Path) -> None:
-        super().__init__(rules, "blocks")
-
-    def put_scene(self, rows: list[tuple], config: PlannerConfig) -> list:
-        a, il = self.agent, self.agent.GetInputLink()
-        top = [a.CreateIntWME(il, "cap", config.cap),
-               a.CreateIntWME(il, "horizon", config.horizon)]
-        for bid, name, size, x, y, z, rel, faces in rows:
-            b = a.CreateIdWME(il, "block")
-            top.append(b)
-            a.CreateIntWME(b, "id", bid)
-            a.CreateStringWME(b, "name", name)
-            a.CreateIntWME(b, "size", size)
-            a.CreateFloatWME(b, "x", x)
-            a.CreateFloatWME(b, "y", y)
-            a.CreateFloatWME(b, "z", z)
-            for side, other in rel:
-                a.CreateIntWME(b, side, other)
-            for face, value in faces:
-                a.CreateFloatWME(b, face, value)
-        return top
-
-    def run_group(self, targets: Sequence[int]) -> list[PlanSequence]:
-        a = self.agent
-        il = a.GetInputLink()
-        wmes = [a.CreateIntWME(il, "target", int(t)) for t in targets]
-        a.Commit()
-        a.RunSelf(100_000)
-        out = [PlanSequence(int(t), pair, int(t_o), order) for t, pair, t_o, order
-               in self.output_sequences(("target", "pair", "t-o", "order"))]
-        for w in wmes:
-            a.DestroyWME(w)
-        a.ExecuteCommandLine("init-soar")
-        return out
-
-    def clear(self, top: list) -> None:
-        for w in top:
-            self.agent.DestroyWME(w)
-        self.agent.Commit()
+#: Targets per run when the config says none: all in ours; in the kernel a few, as it slows
+#: down with many live plans in one run (see the module's docstring).
+_DEFAULT_GROUP = {"sann": len(NAMES), "soar_sml": 3}
 
 
 class Planner:
@@ -239,9 +155,9 @@ class Planner:
     def __init__(self, config: PlannerConfig | None = None, **kwargs: object) -> None:
         self.config = config or PlannerConfig(**kwargs)  # type: ignore[arg-type]
         rules = Path(self.config.rules)
-        self._backend = (_SannBackend(rules) if self.config.engine == "sann"
-                         else _SmlBackend(rules))
-        self.group = self.config.targets_per_run or self._backend.default_group
+        self._backend = (SannBackend(rules) if self.config.engine == "sann"
+                         else SmlBackend(rules, "blocks"))
+        self.group = self.config.targets_per_run or _DEFAULT_GROUP[self.config.engine]
 
     def plan(self, feats: np.ndarray, targets: Iterable[int] | None = None
              ) -> dict[int, list[PlanSequence]]:
@@ -255,14 +171,18 @@ class Planner:
             raise ValueError(f"targets {missing} are not blocks of the scene")
         cfg = self.config
         found: list[PlanSequence] = []
-        if isinstance(self._backend, _SmlBackend):
-            top = self._backend.put_scene(rows, cfg)
-            for g in range(0, len(wanted), self.group):
-                found += self._backend.run_group(wanted[g:g + self.group])
-            self._backend.clear(top)
+        top: list[InputItem] = [("cap", cfg.cap), ("horizon", cfg.horizon)]
+        groups = [[("target", t) for t in wanted[g:g + self.group]]
+                  for g in range(0, len(wanted), self.group)]
+        if isinstance(self._backend, SmlBackend):
+            # The scene stays on the input-link while groups of targets are planned.
+            scene = self._backend.put(top + _scene_items(rows))
+            for group in groups:
+                found += _plans(self._backend.run(group))
+            self._backend.remove(scene)
         else:
-            for g in range(0, len(wanted), self.group):
-                found += self._backend.run(rows, wanted[g:g + self.group], cfg)
+            for group in groups:
+                found += _plans(self._backend.run(top + group + _scene_items(rows)))
         result: dict[int, list[PlanSequence]] = {t: [] for t in wanted}
         for seq in found:
             result[seq.target].append(seq)
@@ -272,7 +192,7 @@ class Planner:
     def agent(self):  # -> sann.soar.Agent (imported lazily, as the backend does)
         """Our engine's agent, its working memory as the last run left it (the scene on the
         input-link, the plans on the output-link): what a reader inspects or draws."""
-        if not isinstance(self._backend, _SannBackend) or self._backend.agent is None:
+        if not isinstance(self._backend, SannBackend) or self._backend.agent is None:
             raise ValueError("only a planner of engine 'sann' that is not closed has an agent")
         return self._backend.agent
 

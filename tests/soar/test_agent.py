@@ -253,7 +253,7 @@ def test_tie_impasse_substate_and_resolution() -> None:
         ("", "state no-change"),
     ],
 )
-def test_impasse_kinds(rules: str, kind: str) -> None:
+def test_each_impasse_kind_makes_its_substate_and_choices(rules: str, kind: str) -> None:
     agent, out = make(rules)
     agent.trace(1)
     agent.run(2)

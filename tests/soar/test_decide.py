@@ -72,7 +72,7 @@ def test_two_requires_or_require_and_prohibit_fail() -> None:
     assert decide(slot) == (dec.CONSTRAINT_FAILURE, [ops["a"]])
 
 
-def test_better_and_worse() -> None:
+def test_better_and_worse_leave_the_one_nothing_beats() -> None:
     slot, ops = slot_with(("a", "+"), ("b", "+"), ("c", "+"), ("a", ">", "b"), ("c", "<", "a"))
     assert decide(slot) == (dec.NONE, [ops["a"]])
 
@@ -84,7 +84,7 @@ def test_conflict_only_when_nothing_else_is_left() -> None:
     assert decide(slot) == (dec.NONE, [ops["c"]])  # the kernel selects c
 
 
-def test_best_and_worst() -> None:
+def test_best_wins_worst_loses_and_all_worst_tie() -> None:
     slot, ops = slot_with(("a", "+"), ("b", "+"), ("c", "+"), ("b", ">"))
     assert decide(slot) == (dec.NONE, [ops["b"]])
     slot, ops = slot_with(("a", "+"), ("b", "+"), ("a", "<"))

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import io
 import re
-import sys
 from pathlib import Path
 
 import pytest
@@ -116,15 +115,6 @@ def test_i_supported_copies_retract_with_their_rule() -> None:
 # ------------------------------------------------------------- against the kernel
 
 _INTERNAL = re.compile(r"^\s*(\(\d+: .*\))\s*$")
-
-
-@pytest.fixture
-def kernel():
-    pytest.importorskip("soar_sml")
-    sys.path.insert(0, str(Path(__file__).parent))
-    from differential import kernel
-
-    return kernel
 
 
 def _kernel_memory(kernel, text: str, decisions: int, item: bool) -> tuple[str, list[str]]:

@@ -7,15 +7,13 @@ order, shared by equal prefixes (see ``KernelOrder`` in rete.py)."""
 
 from __future__ import annotations
 
-import io
 import re
 
 import pytest
-from test_agent_kernel import generated_agent
+from generated_agents import generated_agent
+from side_by_side import kernel_trace, our_trace
 
-from sann.soar import Agent
-
-sml = pytest.importorskip("soar_sml")
+pytest.importorskip("soar_sml")
 
 HEAD = """sp {prop (state <s> ^superstate nil -^done) --> (<s> ^operator <o> +) (<o> ^name go)}
 sp {apply (state <s> ^operator.name go) --> (<s> ^done yes ^x 1)}
@@ -57,29 +55,11 @@ SHAPES = {
 def _kernel_trace(text: str, decisions: int, tmp_path, level: int) -> str:
     path = tmp_path / "agent.soar"
     path.write_text(text)
-    kernel = sml.Kernel.CreateKernelInCurrentThread(True, 0)
-    try:
-        agent = kernel.CreateAgent("order")
-        log: list[str] = []
-        agent.RegisterForPrintEvent(
-            sml.smlEVENT_PRINT, lambda mid, ud, ag, msg: log.append(msg), None
-        )
-        agent.ExecuteCommandLine(f"source {path}")
-        agent.ExecuteCommandLine(f"watch {level}")
-        log.clear()
-        agent.ExecuteCommandLine(f"run {decisions}")
-    finally:
-        kernel.Shutdown()
-    return "".join(log)
+    return kernel_trace([], path, level, decisions)
 
 
 def _our_trace(text: str, decisions: int, level: int) -> str:
-    out = io.StringIO()
-    agent = Agent(out=out)
-    agent.load(text)
-    agent.trace(level)
-    agent.run(decisions)
-    return out.getvalue()
+    return our_trace([text], None, level, decisions)
 
 
 def kernel_events(text: str, decisions: int, tmp_path) -> list[str]:

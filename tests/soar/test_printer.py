@@ -59,7 +59,7 @@ sp {blocks*propose*move
 }"""
 
 
-def test_canonical_layout() -> None:
+def test_a_production_prints_in_the_canonical_layout_and_reads_back() -> None:
     production = parse_production(SOURCE)
     assert format_production(production) == EXPECTED
     assert parse(EXPECTED) == [production]
@@ -78,7 +78,7 @@ def test_canonical_layout() -> None:
         (150.0, "150.0"), (1e20, "1.0e+20"), (-2.5e-7, "-2.5e-07"), (0.0, "0.0"),
     ],
 )  # fmt: skip
-def test_constants(value: object, text: str) -> None:
+def test_constants_print_as_text_that_reads_back_as_themselves(value: object, text: str) -> None:
     assert format_constant(value) == text
     [c] = parse_production(f"sp {{p (state <s> ^v {text}) --> }}").conditions
     assert c.value_test == Const(value) and type(c.value_test.value) is type(value)
@@ -100,7 +100,7 @@ def test_unprintable_constants_are_refused() -> None:
         format_constant(True)
 
 
-def test_single_elements() -> None:
+def test_negations_nccs_and_actions_print_alone() -> None:
     negated = Condition(Var("s"), Const("a"), Const("b"), negated=True, goal="state")
     assert format_condition(negated) == "-(state <s> ^a b)"
     ncc = ConjunctiveNegation((Condition(Var("s"), Const("a"), Var("x")), negated))
@@ -121,7 +121,7 @@ def test_unary_binary_signs_print_unambiguously() -> None:
     assert parse(printed) == [production]
 
 
-def test_commands() -> None:
+def test_commands_print_quoted_and_read_back() -> None:
     assert format_command(Command("watch", ("1",))) == "watch 1"
     assert format_command(Command("source", ("my rules.soar",))) == 'source "my rules.soar"'
     assert format_command(Command("echo", ('say "x"', ""))) == r'echo "say \"x\"" ""'

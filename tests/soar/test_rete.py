@@ -86,7 +86,7 @@ def test_variable_attribute_binds(world: World) -> None:
     assert sorted(b["a"] for b in world.bindings()) == ["color", "shade"]
 
 
-def test_disjunction(world: World) -> None:
+def test_a_disjunction_matches_only_its_listed_values(world: World) -> None:
     for value in ("red", "blue", "green", 1.0):
         world.add(world.s1, "color", value)
     world.rule("(state <s> ^color {<c> << red green 1 >>})")
@@ -107,7 +107,7 @@ def test_relations_between_variables_as_the_kernel_runs_them(world: World) -> No
     """A test runs on the tested WME's value against the bound value: numbers with numbers
     (int and float alike), and between kinds ``<`` and ``<=`` hold, ``>`` and ``>=`` do
     not, as against a constant. (The agent first moves a test on a variable the kernel's
-    order binds later into that variable's condition, inverted: test_agent_kernel.)"""
+    order binds later into that variable's condition, inverted: test_decision_counts_and_traces.)"""
     other = world.new("A")
     world.add(world.s1, "base", 5)
     for value in (3, 5, 7.5, "abc", other):
@@ -144,7 +144,7 @@ def test_not_equal_and_same_type(world: World) -> None:
     assert world.values("same-const", "x") == [1.0]
 
 
-def test_smem_link_tests(world: World) -> None:
+def test_an_unlinked_identifier_fails_at_and_passes_not_at(world: World) -> None:
     world.add(world.s1, "v", world.new("L"))
     world.rule("(state <s> ^v {<x> @ <s>})", "at")
     world.rule("(state <s> ^v {<x> !@ <s>})", "not-at")
@@ -514,7 +514,7 @@ def test_duplicate_production_name_is_an_error(world: World) -> None:
 # ----- semantic checks ------------------------------------------------------------------------
 
 
-# What the kernel refuses (measured in soar_sml 9.6; tests/soar/test_load_checks_kernel.py
+# What the kernel refuses (measured in soar_sml 9.6; tests/soar/test_load_checks.py
 # compares many more shapes with the kernel itself).
 @pytest.mark.parametrize("text, message", [
     ("-(state <s> ^a b)", "no positive condition"),
@@ -668,7 +668,7 @@ def test_removing_a_wme_touches_only_its_tokens() -> None:
     assert {id(m) for m in rete.matches("r")} == before
 
 
-def test_symbol_order() -> None:
+def test_symbols_order_identifiers_then_numbers_then_strings() -> None:
     b1, n1, n2 = Identifier("B", 1), Identifier("N", 1), Identifier("N", 2)
     ordered = [b1, n1, n2, -3, 1, 2.5, 10, "10", "abc"]
     for i, a in enumerate(ordered):

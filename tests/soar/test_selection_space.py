@@ -9,13 +9,11 @@ kernel by doing nothing would still fail.
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import pytest
 
 pytest.importorskip("soar_sml")
-sys.path.insert(0, str(Path(__file__).parent))
 from differential.kernel import Graph, RunResult, our_graph, run_kernel, run_ours  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import time
 import warnings
 from pathlib import Path
 
@@ -574,20 +573,15 @@ def test_rule_files_parse_and_round_trip(path: Path) -> None:
             production.name)
 
 
-def test_parsing_a_file_of_200_productions_is_fast() -> None:
-    """Behaviour, not timing, is asserted: the parse must produce all 200 productions. The
-    time is printed for the report (run with -s)."""
+def test_a_file_of_200_productions_parses_to_all_200_in_order() -> None:
+    """How long it takes is measured by benchmarks/parsing.py, against the kernel."""
     rule = (
         "sp {{rule-{i} (state <s> ^a.b <x> ^c {{ <y> > 3 }} -^d e) (<x> ^f << g h >>)\n"
         "--> (<s> ^operator <o> + =) (<o> ^name n{i} ^value (+ <y> 1))\n"
         "    (write <y> (crlf))}}\n"
     )
     text = "".join(rule.format(i=i) for i in range(200))
-    parse("sp {warm (state <s> ^a b) --> }")
-    start = time.perf_counter()
     items = parse(text)
-    elapsed = time.perf_counter() - start
-    print(f"\nparsed 200 productions in {elapsed * 1000:.0f} ms")
     assert [p.name for p in items] == [f"rule-{i}" for i in range(200)]
 
 
@@ -598,7 +592,7 @@ def test_parsing_a_file_of_200_productions_is_fast() -> None:
 # function into `exec`; we refuse both); numbers too large for 64 bits, which the kernel
 # reports as "bad integer" and then loads anyway. The matcher's load-time checks (conditions
 # not linked to a state, relational tests on unbound variables) are compared with the kernel
-# in test_load_checks_kernel.py.
+# in test_load_checks.py.
 KERNEL_AGREEMENT = [
     "(state <s> ^a.b.c <v> -^d.e f) --> (<s> ^x.y z)",
     "(state <s>) --> (write hi)",

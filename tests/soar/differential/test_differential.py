@@ -51,7 +51,7 @@ def kernel_results() -> dict[Path, RunResult]:
     return {path: run_kernel(path, inputs=_inputs(path)) for path in AGENTS}
 
 
-def test_enough_agents() -> None:
+def test_the_corpus_has_at_least_12_agents() -> None:
     assert len(list((HERE / "agents").glob("*.soar"))) >= 12
 
 

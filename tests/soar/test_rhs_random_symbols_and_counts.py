@@ -433,14 +433,6 @@ sp {random (state <s> ^superstate nil) -->
 """
 
 
-@pytest.fixture
-def kernel():
-    pytest.importorskip("soar_sml")
-    from differential import kernel
-
-    return kernel
-
-
 def test_new_functions_agree_with_the_kernel(kernel, tmp_path: Path) -> None:
     path = tmp_path / "values.soar"
     path.write_text(VALUES_AGENT)
@@ -465,14 +457,9 @@ def test_random_numbers_agree_with_the_kernel_after_srand_7(kernel) -> None:
 
 
 @pytest.mark.parametrize("text", [SIZES, SET_COUNTS, STATE_SIZES])
-def test_counts_agree_with_the_kernel(kernel, text: str) -> None:
-    with kernel.KernelAgent() as ka:
-        for rule in text.strip().split("\nsp "):
-            ka.cmd(rule if rule.startswith("sp ") else "sp " + rule)
-        ka.cmd("watch 0")
-        ka.cmd("run 3")
-        written = ka.take_log()
-    assert run(text, 3)[1] == written
+def test_counts_agree_with_the_kernel(kernel_writes, our_writes, text: str) -> None:
+    written = kernel_writes(text, 3)
+    assert our_writes(text, 3) == written
 
 
 def _rounded(value: tuple) -> tuple:

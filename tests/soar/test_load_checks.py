@@ -75,7 +75,7 @@ def assert_same_verdict(text: str, name: str) -> bool:
 # first two are from Soar's own selection-space default rules. Not here: rules the kernel
 # refuses for an ungrounded RHS action (test_syntax.py compares those): after such a
 # refusal soar_sml 9.6.5 names every variable in later RHS error messages "[RETE-loc]",
-# which breaks test_rhs_errors_kernel.py later in the same process.
+# which breaks test_rhs_errors.py later in the same process.
 SHAPES = [
     ("(state <s> -^problem-space.dont-copy <att> ^default-state-copy yes ^duplicates <d>)"
      " (<s> ^<att> <v>) --> (<d> ^<att> <v>)", True),
@@ -118,7 +118,7 @@ SHAPES = [
 
 
 @pytest.mark.parametrize(("body", "loads"), SHAPES)
-def test_measured_shapes(body: str, loads: bool) -> None:
+def test_measured_shapes_load_as_in_the_kernel(body: str, loads: bool) -> None:
     text = f"sp {{shape\n{body}}}"
     assert kernel_load(text)[0] == loads
     assert assert_same_verdict(text, "shape") == loads

@@ -220,14 +220,6 @@ def test_compiled_actions_print_what_interpreted_ones_do(monkeypatch: pytest.Mon
 # ------------------------------------------------------------- against the kernel
 
 
-@pytest.fixture
-def kernel():
-    pytest.importorskip("soar_sml")
-    from differential import kernel
-
-    return kernel
-
-
 def theirs(kernel, rules: list[str], run: str = "run 1", watch: int = 0) -> tuple[str, str]:
     """What the kernel prints while running (its print events), and then its top state."""
     with kernel.KernelAgent() as ka:

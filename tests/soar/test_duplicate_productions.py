@@ -66,17 +66,11 @@ def test_an_excised_rule_no_longer_blocks_its_duplicate() -> None:
     assert sorted(agent._productions) == ["c"]
 
 
-def test_the_kernel_still_says_so(tmp_path) -> None:
-    sml = pytest.importorskip("soar_sml")
-    kernel = sml.Kernel.CreateKernelInCurrentThread(True, 0)
-    try:
-        for n, (a, b, duplicate) in enumerate(CASES[:5]):
-            path = tmp_path / f"dup{n}.soar"
-            path.write_text(_text(a, b))
-            agent = kernel.CreateAgent(f"dup{n}")
-            agent.ExecuteCommandLine(f"source {{{path}}}")
-            names = sorted(agent.ExecuteCommandLine("print").split())
-            kernel.DestroyAgent(agent)
-            assert names == (["a"] if duplicate else ["a", "b"])
-    finally:
-        kernel.Shutdown()
+def test_the_kernel_still_says_so(kernel, tmp_path) -> None:
+    for n, (a, b, duplicate) in enumerate(CASES[:5]):
+        path = tmp_path / f"dup{n}.soar"
+        path.write_text(_text(a, b))
+        with kernel.KernelAgent() as ka:
+            ka.agent.ExecuteCommandLine(f"source {{{path}}}")
+            names = sorted(ka.agent.ExecuteCommandLine("print").split())
+        assert names == (["a"] if duplicate else ["a", "b"])

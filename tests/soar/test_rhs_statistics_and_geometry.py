@@ -249,14 +249,6 @@ def test_set_functions_take_any_number_of_arguments() -> None:
 # ------------------------------------------------------------- against the kernel
 
 
-@pytest.fixture
-def kernel():
-    pytest.importorskip("soar_sml")
-    from differential import kernel
-
-    return kernel
-
-
 AGENT = """
 sp {init (state <s> ^superstate nil) --> (<s> ^l <l> ^m <m>)
     (<l> ^x 1 ^x 2.5 ^x -4 ^y a ^y 3 ^z <z> ^z <z2> ^n 65536 ^n 65536)
@@ -285,29 +277,31 @@ def test_the_functions_agree_with_the_kernel(kernel, tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(("init", "total", "product"), SUMS[:6] + SUMS[-2:])
-def test_sums_agree_with_the_kernel(kernel, init: str, total: int, product: int) -> None:
+def test_sums_agree_with_the_kernel(kernel_writes, init: str, total: int, product: int) -> None:
     action = "(write (sum <l>) | | (product <l>))"
-    assert _kernel_writes(kernel, RULES.format(init=init, action=action)) == written(init, action)
+    assert kernel_writes(RULES.format(init=init, action=action)) == written(init, action)
 
 
 @pytest.mark.parametrize("name", sorted(SETS))
-def test_set_statistics_agree_with_the_kernel(kernel, name: str) -> None:
+def test_set_statistics_agree_with_the_kernel(kernel_writes, name: str) -> None:
     action = "(write " + " | | ".join(f"({name} <l> {path})" for path in PATHS) + ")"
-    theirs = _kernel_writes(kernel, RULES.format(init=SET_INIT, action=action))
+    theirs = kernel_writes(RULES.format(init=SET_INIT, action=action))
     assert written(SET_INIT, action) == theirs
 
 
 @pytest.mark.parametrize(("args", "shown"), DICE)
-def test_dice_agree_with_the_kernel(kernel, args: tuple, shown: list[str]) -> None:
+def test_dice_agree_with_the_kernel(
+    kernel_writes, our_writes, args: tuple, shown: list[str]
+) -> None:
     words = " ".join(map(str, args))
     calls = [f"(compute-dice-probability {words} {p})" for p in PREDICATES]
     rule = ERROR_RULE.format("(write " + " | | ".join(calls) + ")")
-    assert _kernel_writes(kernel, rule) == run(rule)[1]
+    assert kernel_writes(rule) == our_writes(rule)
     exact = ERROR_RULE.format("(write " + " | | ".join(f"(string {c})" for c in calls) + ")")
-    assert _kernel_writes(kernel, exact) == " ".join(shown)
+    assert kernel_writes(exact) == " ".join(shown)
 
 
-def test_positions_agree_with_the_kernel(kernel) -> None:
+def test_positions_agree_with_the_kernel(kernel_writes, our_writes) -> None:
     calls = [f"(string (haversine {' '.join(map(str, p))}))" for p, _ in HAVERSINES]
     for args, _, y in EXTRAPOLATIONS:
         words = " ".join(map(str, args))
@@ -315,12 +309,12 @@ def test_positions_agree_with_the_kernel(kernel) -> None:
         if y is not None:
             calls.append(f"(extrapolate-y-position {words})")
     rule = ERROR_RULE.format("(write " + " | | ".join(calls) + ")")
-    assert _kernel_writes(kernel, rule) == run(rule)[1]
+    assert kernel_writes(rule) == our_writes(rule)
 
 
-def test_errors_agree_with_the_kernel(kernel) -> None:
+def test_errors_agree_with_the_kernel(kernel_writes) -> None:
     for action, message in ERRORS:
-        theirs = _kernel_writes(kernel, ERROR_RULE.format(action))
+        theirs = kernel_writes(ERROR_RULE.format(action))
         assert theirs.strip() == f"Error: {message}", action
         agent, _ = run(ERROR_RULE.format(action))
         assert agent.errors == [f"Error: production p: {message}"], action
@@ -333,17 +327,6 @@ def test_load_checks_agree_with_the_kernel(kernel) -> None:
             assert not ka.agent.GetLastCommandLineResult(), action
             assert result.splitlines()[0] == message
         ka.cmd(ERROR_RULE.format("(<s> ^a (set-mean <s>) ^b (set-min <s> a b c d e f))"))
-
-
-def _kernel_writes(kernel, text: str) -> str:
-    """What one decision of ``text`` writes in the kernel, the decision trace left out."""
-    with kernel.KernelAgent() as ka:
-        for rule in text.strip().split("\nsp "):
-            ka.cmd(rule if rule.startswith("sp ") else "sp " + rule)
-        ka.cmd("watch 0")
-        ka.take_log()
-        ka.cmd("run 1")
-        return ka.take_log()
 
 
 def test_format_value_of_the_nan_symbol_is_its_text() -> None:

@@ -20,13 +20,11 @@ What was measured in the kernel and is checked here:
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 import pytest
-from test_agent_kernel import generated_agent, generated_substate_agent
-
-from sann.soar import Agent
+from generated_agents import generated_agent, generated_substate_agent
+from side_by_side import kernel_trace, our_trace
 
 pytest.importorskip("soar_sml")
 from differential import kernel as oracle  # noqa: E402  (needs soar_sml)
@@ -84,37 +82,6 @@ CORNERS = {
         "sp {ap (state <s> ^operator.name a) --> (<s> ^done yes)}",
     ],
 }
-
-
-def kernel_trace(rules: list[str], path: Path | None, level: int, decisions: int,
-                 inputs: oracle.Inputs = ()) -> str:
-    """The kernel's print output of ``run decisions`` at ``watch level``."""
-    with oracle.KernelAgent() as ka:
-        if path is not None:
-            ka.cmd(f"source {{{path}}}")
-        for rule in rules:
-            ka.cmd(rule)
-        ka.cmd(f"watch {level}")
-        ka.take_log()
-        ka.add_inputs(inputs)
-        ka.cmd(f"run {decisions}")
-        return ka.take_log()
-
-
-def our_trace(rules: list[str], path: Path | None, level: int, decisions: int,
-              inputs: oracle.Inputs = ()) -> str:
-    out = io.StringIO()
-    agent = Agent(out=out)
-    if path is not None:
-        agent.source(str(path))
-    for rule in rules:
-        agent.load(rule)
-    agent.trace(level)
-    out.seek(0)
-    out.truncate()
-    oracle._add_our_inputs(agent, inputs)
-    agent.run(decisions=decisions)
-    return out.getvalue()
 
 
 def assert_same(rules: list[str], path: Path | None, level: int, decisions: int,

@@ -5,14 +5,15 @@ decision trace must be the kernel's."""
 from __future__ import annotations
 
 import io
-import random
 import re
 
 import pytest
+from differential.kernel import KernelAgent
+from generated_agents import generated_agent, generated_substate_agent
 
 from sann.soar import Agent
 
-sml = pytest.importorskip("soar_sml")
+pytest.importorskip("soar_sml")
 
 AGENTS = {
     "results-and-consistency": """
@@ -109,32 +110,13 @@ sp {rc (state <s> ^operator.name go) --> (write |a3 |) (<s> ^also yes)}
 def kernel_run(text: str, decisions: int, tmp_path) -> tuple[dict, str]:
     path = tmp_path / "agent.soar"
     path.write_text(text)
-    kernel = sml.Kernel.CreateKernelInCurrentThread(True, 0)
-    try:
-        agent = kernel.CreateAgent("probe")
-        log: list[str] = []
-        agent.RegisterForPrintEvent(
-            sml.smlEVENT_PRINT, lambda mid, ud, ag, msg: log.append(msg), None
-        )
-        agent.ExecuteCommandLine(f"source {path}")
-        agent.ExecuteCommandLine("watch 1")
-        log.clear()
-        agent.ExecuteCommandLine(f"run {decisions}")
-        stats = agent.ExecuteCommandLine("stats")
-    finally:
-        kernel.Shutdown()
-
-    def grab(pattern: str) -> int:
-        return int(re.search(pattern, stats).group(1))  # type: ignore[union-attr]
-
-    figures = {
-        "decisions": grab(r"(\d+) decisions"),
-        "elaboration_cycles": grab(r"(\d+) elaboration cycles"),
-        "production_firings": grab(r"(\d+) production firings"),
-        "wme_changes": grab(r"(\d+) wme changes"),
-        "wm_size": grab(r"WM size: (\d+) current"),
-    }
-    return figures, "".join(log)
+    with KernelAgent() as ka:
+        ka.cmd(f"source {{{path}}}")
+        ka.cmd("watch 1")
+        ka.take_log()
+        ka.agent.ExecuteCommandLine(f"run {decisions}")
+        figures = ka.stats()
+        return figures, ka.take_log()
 
 
 def our_run(text: str, decisions: int) -> tuple[dict, str]:
@@ -155,59 +137,11 @@ def _decision_lines(trace: str) -> list[str]:
 
 
 @pytest.mark.parametrize("name", sorted(AGENTS))
-def test_agrees_with_kernel(name: str, tmp_path) -> None:
+def test_focused_agents_count_and_trace_as_the_kernel(name: str, tmp_path) -> None:
     theirs, their_trace = kernel_run(AGENTS[name], 15, tmp_path)
     ours, our_trace = our_run(AGENTS[name], 15)
     assert ours == theirs
     assert _decision_lines(our_trace) == _decision_lines(their_trace)
-
-
-def generated_agent(seed: int) -> str:
-    """A small random agent: proposals with random preferences, applications that count,
-    preference rules between proposals, and substate rules for every impasse kind."""
-    r = random.Random(seed)
-    ops = ["a", "b", "c", "d"][: r.randint(2, 4)]
-    lines = [f"indifferent-selection --{r.choice(['first', 'last'])}"]
-    lines.append(
-        "sp {init (state <s> ^superstate nil -^count) --> (<s> ^operator <o> + >) (<o> ^name init)}"
-    )
-    lines.append("sp {init*a (state <s> ^operator.name init) --> (<s> ^count 0)}")
-    for op in ops:
-        prefs = r.choice(["+", "+ =", "+ >", "+ <", "+ = 0.5", "+ !", "+ ~", "+ -", "+ = >"])
-        cond = r.choice(["", "^flag yes", "-^flag"])
-        lines.append(
-            f"sp {{p{op} (state <s> ^superstate nil ^count <c> < 5 {cond})"
-            f" --> (<s> ^operator <o> {prefs}) (<o> ^name {op})}}"
-        )
-        effect = r.choice(["(<s> ^flag yes)", "(<s> ^flag yes -)", f"(<s> ^note {op})", ""])
-        lines.append(
-            f"sp {{ap{op} (state <s> ^operator.name {op} ^count <c>)"
-            f" --> (<s> ^count <c> - (+ <c> 1)) {effect} (write {op} (crlf))}}"
-        )
-    for _ in range(r.randint(0, 3)):
-        x, y = r.sample(ops, 2)
-        kind = r.choice([">", "<", "="])
-        name = {">": "better", "<": "worse", "=": "same"}[kind]
-        lines.append(
-            f"sp {{pref*{x}*{y}*{name} (state <s> ^operator <x> + ^operator <y> +)"
-            f" (<x> ^name {x}) (<y> ^name {y}) --> (<s> ^operator <x> {kind} <y>)}}"
-        )
-    first, last = ops[0], ops[-1]
-    lines += [
-        "sp {tie (state <s> ^impasse << tie conflict >> ^superstate <ss> ^item <i>)"
-        f" (<i> ^name {first}) --> (<ss> ^operator <i> >)}}",
-        "sp {tie2 (state <s> ^impasse << tie conflict >> ^superstate <ss> ^item <i>)"
-        f" (<i> ^name {last}) --> (<ss> ^operator <i> !)}}",
-        "sp {elab (state <s> ^superstate nil ^count <c>) --> (<s> ^double (* <c> 2))}",
-        "sp {snc (state <s> ^impasse no-change ^attribute state ^superstate <ss>)"
-        " (<ss> ^count <c>) --> (<ss> ^count <c> - (+ <c> 1))}",
-        "sp {onc (state <s> ^impasse no-change ^attribute operator ^superstate <ss>)"
-        " (<ss> ^operator <o>) --> (<s> ^operator <q> +) (<q> ^name fix)}",
-        "sp {oncfix (state <s> ^operator.name fix ^superstate <ss>) (<ss> ^count <c>)"
-        " --> (<ss> ^count <c> - (+ <c> 10))}",
-        "sp {done (state <s> ^superstate nil ^count > 4) --> (write |done| (crlf)) (halt)}",
-    ]
-    return "\n".join(lines) + "\n"
 
 
 @pytest.mark.parametrize("seed", range(12))
@@ -217,72 +151,6 @@ def test_generated_agents_agree_with_kernel(seed: int, tmp_path) -> None:
     ours, our_trace = our_run(text, 15)
     assert ours == theirs
     assert _decision_lines(our_trace) == _decision_lines(their_trace)
-
-
-def generated_substate_agent(seed: int) -> str:
-    """A random agent whose top operator is worked out in substates: local o-supported
-    structure (goal dependency sets), results of either support, a third level."""
-    r = random.Random(seed)
-    lines = [f"indifferent-selection --{r.choice(['first', 'last'])}"]
-    lines += [
-        "sp {init (state <s> ^superstate nil -^count) --> (<s> ^operator <o> + >)"
-        " (<o> ^name init)}",
-        "sp {init*a (state <s> ^operator.name init) --> (<s> ^count 0 ^weather rain)}",
-        f"sp {{top*work (state <s> ^superstate nil ^count <c> < {r.randint(2, 5)})"
-        " --> (<s> ^operator <o> +) (<o> ^name work ^at <c>)}",
-        "sp {top*weather (state <s> ^superstate nil ^count <c> ^weather <w>)"
-        " --> (<s> ^wx (concat <w> <c>))}",
-    ]
-    if r.random() < 0.5:
-        pref = r.choice(["", "=", "<", ">"])
-        lines.append(
-            "sp {top*work2 (state <s> ^superstate nil ^count <c> < 3)"
-            f" --> (<s> ^operator <o> + {pref}) (<o> ^name work2)}}"
-        )
-    test = r.choice(["^superstate.operator.name work", "^superstate.operator <o>"])
-    lines.append(f"sp {{s*elab (state <s> {test}) --> (<s> ^local yes)}}")
-    lines.append(
-        "sp {s*p (state <s> ^local yes -^done) --> (<s> ^operator <o> +) (<o> ^name step)}"
-    )
-    kind = r.choice(["o-result", "i-result", "gds"])
-    if kind == "o-result":
-        lines.append(
-            "sp {s*a (state <s> ^operator.name step ^superstate <ss>) (<ss> ^count <c>)"
-            " --> (<ss> ^count <c> - (+ <c> 1)) (<s> ^done yes)}"
-        )
-    elif kind == "i-result":
-        lines += [
-            "sp {s*a (state <s> ^operator.name step) --> (<s> ^done yes)}",
-            "sp {s*res (state <s> ^done yes ^superstate <ss>) (<ss> ^count <c>)"
-            " --> (<ss> ^flag (+ <c> 100))}",
-            "sp {top*use (state <s> ^superstate nil ^flag <f> ^count <c>)"
-            " --> (<s> ^operator <o> + >) (<o> ^name bump)}",
-            "sp {top*bump (state <s> ^operator.name bump ^count <c>)"
-            " --> (<s> ^count <c> - (+ <c> 1))}",
-        ]
-    else:
-        lines += [
-            "sp {s*a (state <s> ^operator.name step ^superstate.wx <w>)"
-            " --> (<s> ^done yes ^saw <w>)}",
-            "sp {s*p2 (state <s> ^done yes -^finished) --> (<s> ^operator <o> +)"
-            " (<o> ^name finish)}",
-            "sp {s*a2 (state <s> ^operator.name finish ^superstate <ss>) (<ss> ^count <c>)"
-            " --> (<ss> ^count <c> - (+ <c> 1)) (<s> ^finished yes)}",
-        ]
-    if r.random() < 0.5:
-        lines += [
-            "sp {s*deep (state <s> ^superstate.superstate.operator.name work)"
-            " --> (<s> ^operator <o> +) (<o> ^name deep)}",
-            "sp {s*deep*a (state <s> ^operator.name deep ^superstate.superstate <top>)"
-            " (<top> ^count <c>) --> (<top> ^count <c> - (+ <c> 1))}",
-        ]
-    lines += [
-        "sp {tie (state <s> ^impasse tie ^superstate <ss> ^item <i>) (<i> ^name work)"
-        " --> (<ss> ^operator <i> >)}",
-        "sp {done (state <s> ^superstate nil ^count <c> >= 3)"
-        " --> (write |done | <c> (crlf)) (halt)}",
-    ]
-    return "\n".join(lines) + "\n"
 
 
 @pytest.mark.parametrize("seed", range(10))
@@ -304,15 +172,10 @@ WIDE = (
 def test_print_wraps_by_the_column_the_trace_left_like_the_kernel() -> None:
     """The kernel counts columns on its output: after ``run 1`` its trace line has no
     newline, so the next print wraps its first line earlier; the print after it does not."""
-    kernel = sml.Kernel.CreateKernelInCurrentThread(True, 0)
-    try:
-        theirs_agent = kernel.CreateAgent("wide")
-        kernel.ExecuteCommandLine(WIDE, "wide")
-        kernel.ExecuteCommandLine("run 1", "wide")
-        theirs = [kernel.ExecuteCommandLine("print X1", "wide") for _ in range(2)]
-        kernel.DestroyAgent(theirs_agent)
-    finally:
-        kernel.Shutdown()
+    with KernelAgent() as ka:
+        ka.agent.ExecuteCommandLine(WIDE)
+        ka.agent.ExecuteCommandLine("run 1")
+        theirs = [ka.agent.ExecuteCommandLine("print X1") for _ in range(2)]
     agent = Agent(out=io.StringIO())
     agent.trace(1)  # the kernel's default watch level
     agent.load(WIDE)
@@ -324,15 +187,10 @@ def test_print_wraps_by_the_column_the_trace_left_like_the_kernel() -> None:
 
 @pytest.mark.parametrize("before", [[], ["print s1", "init-soar"], ["print s1"]])
 def test_first_print_of_a_new_or_reinitialised_agent_wraps_like_the_kernel(before) -> None:
-    kernel = sml.Kernel.CreateKernelInCurrentThread(True, 0)
-    try:
-        theirs_agent = kernel.CreateAgent("fresh")
+    with KernelAgent() as ka:
         for line in before:
-            kernel.ExecuteCommandLine(line, "fresh")
-        theirs = kernel.ExecuteCommandLine("print s1", "fresh")
-        kernel.DestroyAgent(theirs_agent)
-    finally:
-        kernel.Shutdown()
+            ka.agent.ExecuteCommandLine(line)
+        theirs = ka.agent.ExecuteCommandLine("print s1")
     agent = Agent(out=io.StringIO())
     agent.trace(1)  # the kernel's default watch level: init-soar traces the new S1
     for line in before:
@@ -345,20 +203,13 @@ def test_init_soar_traces_and_answers_like_the_kernel(level) -> None:
     """init-soar's trace of the new top state at every watch level, its answer, and the
     column the next print wraps by (watch 0 leaves the column where the run left it)."""
     rule = "sp {a (state <s> ^superstate nil) --> (<s> ^x 1) (write |wide enough to wrap|)}"
-    kernel = sml.Kernel.CreateKernelInCurrentThread(True, 0)
-    log: list[str] = []
-    try:
-        theirs_agent = kernel.CreateAgent("again")
-        theirs_agent.RegisterForPrintEvent(sml.smlEVENT_PRINT, lambda *a: log.append(a[-1]), None)
+    with KernelAgent() as ka:
         for line in (rule, f"watch {level}", "run 1"):
-            kernel.ExecuteCommandLine(line, "again")
-        log.clear()
-        answer = kernel.ExecuteCommandLine("init-soar", "again")
-        theirs = "".join(log) + answer
-        theirs_print = kernel.ExecuteCommandLine("print s1", "again")
-        kernel.DestroyAgent(theirs_agent)
-    finally:
-        kernel.Shutdown()
+            ka.agent.ExecuteCommandLine(line)
+        ka.take_log()
+        answer = ka.agent.ExecuteCommandLine("init-soar")
+        theirs = ka.take_log() + answer
+        theirs_print = ka.agent.ExecuteCommandLine("print s1")
     out = io.StringIO()
     agent = Agent(out=out)
     agent.trace(1)

@@ -43,7 +43,7 @@ Rules measured in the kernel:
 from __future__ import annotations
 
 import pytest
-from test_kernel_details import kernel, ours, same, theirs  # noqa: F401  (the fixture)
+from side_by_side import ours, same, theirs
 
 AGENTS = "tests/soar/differential/agents"
 

@@ -72,7 +72,7 @@ def call(name: str, *args):
         ("sqrt", (4,), 2.0),
     ],
 )
-def test_functions(name: str, args: tuple, expected) -> None:
+def test_functions_return_the_kernels_values_and_types(name: str, args: tuple, expected) -> None:
     result = call(name, *args)
     assert result == pytest.approx(expected) if isinstance(expected, float) else result == expected
     assert type(result) is type(expected)
@@ -94,7 +94,7 @@ def test_int_and_float_types_are_kept() -> None:
         ("int", ("99999999999999999999",)),  # (int x) is 0, as C's strtol reads it
     ],
 )
-def test_errors(name: str, args: tuple) -> None:
+def test_bad_arguments_raise_a_runtime_error(name: str, args: tuple) -> None:
     with pytest.raises(SoarRuntimeError):
         call(name, *args)
 
@@ -111,12 +111,12 @@ def test_write_crlf_halt_interrupt_dc_and_gensym() -> None:
     assert FUNCTIONS["make-constant-symbol"](ctx, ["foo"]) == "foo2"
 
 
-def test_timestamp_shape() -> None:
+def test_timestamp_has_the_kernels_layout() -> None:
     stamp = call("timestamp")
     assert len(stamp) == 23 and stamp[4] == "-" and stamp[19] == "."
 
 
-def test_format_value() -> None:
+def test_format_value_prints_floats_with_six_decimals_and_identifiers_by_name() -> None:
     assert format_value(0.1) == "0.100000"
     assert format_value(1e-7) == "0.000000"
     assert format_value(Identifier("S", 1)) == "S1"
