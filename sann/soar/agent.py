@@ -51,7 +51,7 @@ from .production import (
     same_production,
 )
 from .results import find_results
-from .rete import KernelOrder, _wme_fits, equality_vars, negation_matches, prefix_token
+from .rete import KernelOrder, _exists, _positive, _wme_fits, equality_vars, prefix_token
 from .rhs import FUNCTIONS, format_value, kernel_random
 from .trace import print_identifier, symbol_text, trace_preference, trace_wme
 
@@ -1878,18 +1878,10 @@ class Agent:
             self._check_conjunctive_negations()
 
     def _check_conjunctive_negations(self) -> None:
-        """Retract the justifications whose watched conjunctive negation now matches (a
-        brute-force match over the WMEs with its attributes: this is rare)."""
+        """Retract the justifications whose watched conjunctive negation now matches."""
         checks, self._ncc_checks = self._ncc_checks, []
         for just, element, bindings in checks:
-            if just.retracted:
-                continue
-            attrs = {cond.attr_test.value for cond in element.conditions
-                     if isinstance(cond, Condition) and isinstance(cond.attr_test, Const)}
-            wmes = [w for w in self._wm.values() if w.attr in attrs]
-            if len(attrs) < len(element.conditions):  # a variable attribute somewhere
-                wmes = list(self._wm.values())
-            if negation_matches(element, wmes, bindings):
+            if not just.retracted and _exists(element.conditions, bindings, self._candidates):
                 self._schedule_retraction(just)
 
     def _working_memory_changes(self, diffs_last: bool = False) -> None:
@@ -2704,17 +2696,13 @@ class Agent:
         return True
 
     def _negation_holds_not(self, element: object, bindings: dict[str, Symbol]) -> bool:
-        """Whether a WME now matches a negated condition or conjunctive negation."""
+        """Whether a WME now matches a negated condition or conjunctive negation: a search
+        that takes each condition's candidates from the index by identifier once an outer
+        or earlier condition binds it (not a scan of working memory per condition)."""
         if isinstance(element, ConjunctiveNegation):
-            wmes: dict[WME, None] = {}
-            for cond in element.conditions:
-                if isinstance(cond, Condition):
-                    wmes.update(dict.fromkeys(self._candidates(cond, bindings)))
-                else:
-                    wmes.update(dict.fromkeys(self._wm.values()))
-            return negation_matches(element, list(wmes), bindings)
+            return _exists(element.conditions, bindings, self._candidates)
         assert isinstance(element, Condition)
-        return negation_matches(element, self._candidates(element, bindings), bindings)
+        return _exists((_positive(element),), bindings, self._candidates)
 
     def _negations_of(
         self, visited: list[Instantiation], level: int
