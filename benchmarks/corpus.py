@@ -18,7 +18,10 @@ engines make the same decisions):
   the fastest of these runs (so that a moment of another process does not pass for a slow
   decision), and the slowest decision is set against the median decision: a decision far
   above the median is where some working-memory change costs out of proportion (the
-  kernel's side is its total time only).
+  kernel's side is its total time only). The time the cyclic garbage collector took in the
+  slowest decision is shown beside it (``gc ms``), and the slowest decision without its
+  collections against the median (``no gc``): a full collection is CPython's, not the
+  engine's algorithm, and the kernel has none.
 
 A row is flagged ``SLOW`` when ours takes over 10x the kernel's time, ``SPIKE`` when one of
 our decisions takes over 20x the run's median decision. A program that ours cannot run (it
@@ -29,6 +32,7 @@ The figures are ratios measured in the same run; absolute times are printed too.
 from __future__ import annotations
 
 import argparse
+import gc
 import io
 import statistics
 import sys
@@ -68,6 +72,8 @@ class Row:
     median_decision_s: float = 0.0
     slowest_decision_s: float = 0.0
     slowest_at: int = 0
+    slowest_gc_s: float = 0.0
+    slowest_no_gc_s: float = 0.0
     error: str = ""
 
     @property
@@ -77,6 +83,11 @@ class Row:
     @property
     def spike(self) -> float:
         return self.slowest_decision_s / self.median_decision_s if self.median_decision_s else 0.0
+
+    @property
+    def spike_no_gc(self) -> float:
+        """The slowest decision without its garbage collection, against the median."""
+        return self.slowest_no_gc_s / self.median_decision_s if self.median_decision_s else 0.0
 
     def flags(self) -> str:
         marks = []
@@ -131,28 +142,55 @@ def our_run(path: Path, limit: int) -> tuple[float, int]:
     return seconds, int(agent.stats["decisions"])
 
 
-def our_decision_times(path: Path, limit: int) -> list[float]:
-    """Seconds of each of our decisions, one ``run(1)`` at a time, until halt. The last
-    call, which halts in the next cycle's phases before its decision, is timed with the
-    decision before it."""
-    agent = our_agent(path)
-    times: list[float] = []
-    while not agent.halted and len(times) < limit:
-        before = agent.stats["decisions"]
-        t0 = time.perf_counter()
-        agent.run(1)
-        seconds = time.perf_counter() - t0
-        if agent.stats["decisions"] > before or not times:
-            times.append(seconds)
+class GcClock:
+    """Seconds the cyclic garbage collector ran, read through ``gc.callbacks``: a collection
+    of the oldest generation traverses every tracked object, so it lands on whichever
+    decision allocates at that moment (the same one each run, allocation being
+    deterministic) and would pass for a decision that costs out of proportion."""
+
+    def __init__(self) -> None:
+        self.seconds = 0.0
+        self._start = 0.0
+
+    def __enter__(self) -> GcClock:
+        gc.callbacks.append(self._tick)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        gc.callbacks.remove(self._tick)
+
+    def _tick(self, phase: str, info: dict) -> None:
+        if phase == "start":
+            self._start = time.perf_counter()
         else:
-            times[-1] += seconds
+            self.seconds += time.perf_counter() - self._start
+
+
+def our_decision_times(path: Path, limit: int) -> list[tuple[float, float]]:
+    """Seconds of each of our decisions, one ``run(1)`` at a time, until halt, with the
+    seconds of garbage collection in it. The last call, which halts in the next cycle's
+    phases before its decision, is timed with the decision before it."""
+    agent = our_agent(path)
+    times: list[tuple[float, float]] = []
+    with GcClock() as clock:
+        while not agent.halted and len(times) < limit:
+            before = agent.stats["decisions"]
+            collected = clock.seconds
+            t0 = time.perf_counter()
+            agent.run(1)
+            seconds = time.perf_counter() - t0
+            spent = (seconds, clock.seconds - collected)
+            if agent.stats["decisions"] > before or not times:
+                times.append(spent)
+            else:
+                times[-1] = (times[-1][0] + spent[0], times[-1][1] + spent[1])
     return times
 
 
-def steadiest(runs: Iterable[list[float]]) -> list[float]:
-    """Decision by decision, the fastest of several runs' times: another process taking the
-    machine for a moment makes one run's decision slow, a decision that costs is slow in all
-    (the runs are deterministic, so decision i is the same decision in each)."""
+def steadiest(runs: Iterable[list[tuple[float, float]]]) -> list[tuple[float, float]]:
+    """Decision by decision, the fastest of several runs' (time, GC time): another process
+    taking the machine for a moment makes one run's decision slow, a decision that costs is
+    slow in all (the runs are deterministic, so decision i is the same decision in each)."""
     return [min(times) for times in zip(*runs, strict=False)]
 
 
@@ -176,9 +214,12 @@ def measure(path: Path, repeat: int) -> Row:
         row.kernel_s = min(kernel_times) if kernel_times else 0.0
         return row
     row.kernel_s, row.ours_s = min(kernel_times), min(our_times)
-    row.median_decision_s = statistics.median(per_decision)
-    slowest = max(range(len(per_decision)), key=per_decision.__getitem__)
-    row.slowest_decision_s, row.slowest_at = per_decision[slowest], slowest + 1
+    totals = [seconds for seconds, _ in per_decision]
+    row.median_decision_s = statistics.median(totals)
+    slowest = max(range(len(totals)), key=totals.__getitem__)
+    row.slowest_decision_s, row.slowest_at = totals[slowest], slowest + 1
+    row.slowest_gc_s = per_decision[slowest][1]
+    row.slowest_no_gc_s = max(seconds - collecting for seconds, collecting in per_decision)
     return row
 
 
@@ -187,7 +228,8 @@ def measure(path: Path, repeat: int) -> Row:
 
 def table(rows: list[Row]) -> str:
     head = (f"{'program':34} {'dec':>6} {'kernel ms':>10} {'ours ms':>10} {'ours/k':>7} "
-            f"{'median ms':>10} {'slowest ms':>11} {'at':>5} {'max/med':>8}  flags")
+            f"{'median ms':>10} {'slowest ms':>11} {'at':>5} {'gc ms':>7} {'max/med':>8} "
+            f"{'no gc':>7}  flags")
     lines = [head, "-" * len(head)]
     for r in rows:
         if r.error and not r.ours_s:
@@ -197,7 +239,8 @@ def table(rows: list[Row]) -> str:
         lines.append(
             f"{r.name:34} {r.decisions:>6} {r.kernel_s * 1e3:>10.2f} {r.ours_s * 1e3:>10.2f} "
             f"{r.ratio:>6.1f}x {r.median_decision_s * 1e3:>10.3f} "
-            f"{r.slowest_decision_s * 1e3:>11.3f} {r.slowest_at:>5} {r.spike:>7.1f}x  "
+            f"{r.slowest_decision_s * 1e3:>11.3f} {r.slowest_at:>5} {r.slowest_gc_s * 1e3:>7.2f} "
+            f"{r.spike:>7.1f}x {r.spike_no_gc:>6.1f}x  "
             f"{r.flags()}{'  ' + r.error if r.error else ''}")
     timed = [r for r in rows if r.ours_s and r.kernel_s]
     if timed:

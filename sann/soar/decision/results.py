@@ -24,7 +24,7 @@ from ..goals import Goal
 from ..instantiation import (
     Instantiation,
 )
-from ..matching.oracle import negation_matches
+from ..matching.kernel_prefix import _exists, _positive
 from ..memory import WME, Identifier, Symbol
 from ..preferences import (
     ACCEPTABLE,
@@ -345,17 +345,13 @@ def _watch_negations(agent: AgentState, just: Instantiation, visited: list[Insta
 
 
 def _negation_holds_not(agent: AgentState, element: object, bindings: dict[str, Symbol]) -> bool:
-    """Whether a WME now matches a negated condition or conjunctive negation."""
+    """Whether a WME now matches a negated condition or conjunctive negation: a search
+    that takes each condition's candidates from the index by identifier once an outer
+    or earlier condition binds it (not a scan of working memory per condition)."""
     if isinstance(element, ConjunctiveNegation):
-        wmes: dict[WME, None] = {}
-        for cond in element.conditions:
-            if isinstance(cond, Condition):
-                wmes.update(dict.fromkeys(agent._candidates(cond, bindings)))
-            else:
-                wmes.update(dict.fromkeys(agent._wm.values()))
-        return negation_matches(element, list(wmes), bindings)
+        return _exists(element.conditions, bindings, agent._candidates)
     assert isinstance(element, Condition)
-    return negation_matches(element, agent._candidates(element, bindings), bindings)
+    return _exists((_positive(element),), bindings, agent._candidates)
 
 
 def _negations_of(agent: AgentState, visited: list[Instantiation], level: int

@@ -8,10 +8,9 @@ kernel's order.
 
 from __future__ import annotations
 
-from ..matching.oracle import negation_matches
+from ..matching.kernel_prefix import _exists
 from ..memory import WME, Symbol
 from ..preferences import ACCEPTABLE, PROHIBIT, REJECT, REQUIRE, Preference, Slot
-from ..production import Condition, Const
 from ..trace import trace_wme
 from .agent_state import AgentState, vkey
 from .firing import remove_preference
@@ -35,18 +34,10 @@ def working_memory_phase(agent: AgentState, diffs_last: bool = False) -> None:
 
 
 def _check_conjunctive_negations(agent: AgentState) -> None:
-    """Retract the justifications whose watched conjunctive negation now matches (a
-    brute-force match over the WMEs with its attributes: this is rare)."""
+    """Retract the justifications whose watched conjunctive negation now matches."""
     checks, agent._ncc_checks = agent._ncc_checks, []
     for just, element, bindings in checks:
-        if just.retracted:
-            continue
-        attrs = {cond.attr_test.value for cond in element.conditions
-                 if isinstance(cond, Condition) and isinstance(cond.attr_test, Const)}
-        wmes = [w for w in agent._wm.values() if w.attr in attrs]
-        if len(attrs) < len(element.conditions):  # a variable attribute somewhere
-            wmes = list(agent._wm.values())
-        if negation_matches(element, wmes, bindings):
+        if not just.retracted and _exists(element.conditions, bindings, agent._candidates):
             agent._schedule_retraction(just)
 
 
