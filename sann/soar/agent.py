@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import TextIO, cast
 
 from . import decide as dec
+from .chunking import Chunker
 from .errors import SoarError, SoarRuntimeError
 from .goals import Goal
 from .instantiation import (
@@ -131,9 +132,9 @@ class Agent:
         self.max_gp = 20000  # most productions one gp may make (the kernel's default)
         self.multi_attributes: dict[str, int] = {}
         self.warnings = True
-        #: when the kernel would learn chunks (``chunk always|never|only|except``): this
-        #: engine does not learn, so it runs only with ``never``
+        #: when the kernel would learn chunks (``chunk always|never|only|except``)
         self.learning = "never"
+        self.chunker = Chunker()
         self._gensym_counter = 0
         self.matcher = self._matcher_class()
         # the kernel Rete's node tree, for the order it makes matches in (_kernel_key)
@@ -361,11 +362,6 @@ class Agent:
         """Run until halt or interrupt, or until ``decisions`` more decisions were made."""
         if decisions is not None and decisions < 0:
             raise SoarRuntimeError(f"run: decision count must be >= 0, got {decisions}")
-        if self.learning != "never":
-            raise SoarRuntimeError(
-                f"run: learning is on ('chunk {self.learning}'), and this engine does not "
-                "learn chunks: turn it off with 'chunk never' (or 'learn --off') first"
-            )
         self._stop = False
         self._halt_note = ""
         target = None if decisions is None else self._decisions + self._owed(decisions)
@@ -2558,6 +2554,8 @@ class Agent:
         home = inst.goal.superstate
         assert home is not None  # results come from substates
         just = self._make_justification(inst, results, grounds, home, inst)
+        if self.learning != "never":
+            self.chunker.learn(self, just, results, inst.goal)
         if self._watch_negations(just, visited, inst.goal.level):
             self._justification_matches(inst.goal, min(self._level_of(p.id) for p in results))
         while home.superstate is not None:

@@ -1,0 +1,5 @@
+"""Soar 9.6's explanation-based chunking: backtrace a result, variablize, add the rule."""
+
+from .learn import Chunker
+
+__all__ = ["Chunker"]

@@ -1,0 +1,200 @@
+"""A chunk from an explanation: grounds variablized by identity, results as actions.
+
+The conditions are the grounds (one per superstate WME: conditions of several firings that
+tested the same WME are merged, their identities unified), their tests as the rules wrote
+them with each variable replaced by its identity's variable, or by the symbol when the
+identity was literalized; the kept negations; the constraints of local conditions on the
+identities they constrain. The actions are the results' actions, variablized the same way;
+a local identifier a result links to becomes a new identifier of the chunk. The text is
+then parsed like any rule, so a chunk is checked as a rule is (an unconnected condition or
+action fails, and a justification stands in).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Hashable
+
+from ..memory import Identifier
+from ..printer import format_production
+from ..production import (
+    Condition,
+    ConditionElement,
+    Conjunction,
+    ConjunctiveNegation,
+    Const,
+    FuncCall,
+    MakeAction,
+    Production,
+    Relational,
+    RhsValue,
+    Test,
+    Var,
+)
+from ..syntax import parse_production
+from .backtrace import FIELDS, Explanation, Ground, Step, equality_var
+
+
+class Variablizer:
+    """Names the chunk's variables, one per identity root (``<x1>``, ``<x2>``, ...)."""
+
+    def __init__(self, ex: Explanation) -> None:
+        self.ex = ex
+        self.names: dict[Hashable, str] = {}
+        self.counts: dict[str, int] = {}
+        self.bound: set[Hashable] = set()
+
+    def name(self, root: Hashable, hint: str) -> str:
+        found = self.names.get(root)
+        if found is None:
+            letter = hint[0].lower() if hint and hint[0].isalpha() else "v"
+            count = self.counts.get(letter, 0) + 1
+            self.counts[letter] = count
+            found = self.names[root] = f"{letter}{count}"
+        return found
+
+    def var(self, step: Step, name: str, lhs: bool = True) -> Test:
+        """The variable (or literal) of a rule variable of a step in the chunk."""
+        key = self.ex.key(step, name)
+        root = self.ex.ids.find(key)
+        value = step.bindings.get(name)
+        if self.ex.ids.is_literal(key) and value is not None and not isinstance(
+                value, Identifier):
+            return Const(value)  # type: ignore[arg-type]
+        if not lhs and root not in self.bound:
+            if isinstance(value, Identifier):  # a new identifier of the chunk
+                return Var(self.name(("new", value), name))
+            if value is None:  # local to a negation
+                return Var(self.name(("unbound", root), name))
+            return Const(value)  # type: ignore[arg-type]
+        return Var(self.name(root, "s" if isinstance(key[0], str) else name))  # type: ignore[index]
+
+    def test(self, test: Test, step: Step, lhs: bool = True) -> Test:
+        if isinstance(test, Var):
+            return self.var(step, test.name, lhs)
+        if isinstance(test, Relational):
+            operand = test.operand
+            if isinstance(operand, Var):
+                mapped = self.var(step, operand.name, lhs=False)
+                return Relational(test.op, mapped)  # type: ignore[arg-type]
+            return test
+        if isinstance(test, Conjunction):
+            return _conjoin([self.test(part, step, lhs) for part in test.tests])
+        return test
+
+
+def build_chunk(ex: Explanation, name: str) -> Production:
+    """The chunk of an explanation, parsed and checked (raises the parser's error)."""
+    grounds = list(ex.grounds.values())
+    for ground in grounds:
+        _merge(ex, ground)
+    vz = Variablizer(ex)
+    for ground in grounds:
+        cond, step = ground.tests[0]
+        for field in FIELDS:
+            var = equality_var(getattr(cond, field))
+            if var is not None:
+                vz.bound.add(ex.ids.find(ex.key(step, var)))
+    conditions: list[ConditionElement] = [_ground_condition(vz, g) for g in grounds]
+    _add_constraints(vz, ex, conditions)
+    conditions.extend(_negation(vz, element, step) for element, step in ex.negations)
+    conditions.sort(key=lambda c: 0 if isinstance(c, Condition) and c.goal else 1)
+    actions = [_action(vz, action, step) for _, action, step in ex.results]
+    production = Production(name, tuple(conditions), tuple(actions), flags=("chunk",))
+    return parse_production(format_production(production), f"<chunk {name}>")
+
+
+def _merge(ex: Explanation, ground: Ground) -> None:
+    """Conditions of several firings on one WME: one identity per field."""
+    first, step0 = ground.tests[0]
+    for cond, step in ground.tests[1:]:
+        for field in FIELDS:
+            a, b = equality_var(getattr(first, field)), equality_var(getattr(cond, field))
+            if a is not None and b is not None:
+                ex.ids.union(ex.key(step0, a), ex.key(step, b))
+
+
+def _ground_condition(vz: Variablizer, ground: Ground) -> Condition:
+    fields: list[Test] = []
+    for field in FIELDS:
+        parts: list[Test] = []
+        for cond, step in ground.tests:
+            parts.append(vz.test(getattr(cond, field), step))
+        fields.append(_conjoin(parts))
+    is_state = isinstance(ground.wme.id, Identifier) and ground.wme.id.is_state
+    return Condition(fields[0], fields[1], fields[2], acceptable=ground.wme.acceptable,
+                     goal="state" if is_state else None)
+
+
+def _add_constraints(vz: Variablizer, ex: Explanation,
+                     conditions: list[ConditionElement]) -> None:
+    """Relational tests of local conditions, on the ground field that binds their identity
+    (dropped when the identity was literalized or no ground tests it)."""
+    where: dict[Hashable, tuple[int, str]] = {}
+    for index, ground in enumerate(ex.grounds.values()):
+        cond, step = ground.tests[0]
+        for field in FIELDS:
+            var = equality_var(getattr(cond, field))
+            if var is not None:
+                where.setdefault(ex.ids.find(ex.key(step, var)), (index, field))
+    for key, rel, step in ex.constraints:
+        root = ex.ids.find(key)
+        if ex.ids.is_literal(key) or root not in where:
+            continue
+        index, field = where[root]
+        cond = conditions[index]
+        assert isinstance(cond, Condition)
+        mapped = vz.test(rel, step)
+        new = _conjoin([getattr(cond, field), mapped])
+        conditions[index] = _replace(cond, field, new)
+
+
+def _replace(cond: Condition, field: str, test: Test) -> Condition:
+    tests = {name: getattr(cond, name) for name in FIELDS}
+    tests[field] = test
+    return Condition(tests["id_test"], tests["attr_test"], tests["value_test"],
+                     cond.negated, cond.acceptable, cond.goal)
+
+
+def _conjoin(parts: list[Test]) -> Test:
+    """One test from several on one field, equal ones once, the equality test first."""
+    flat: list[Test] = []
+    for part in parts:
+        for test in part.tests if isinstance(part, Conjunction) else (part,):
+            if test not in flat:
+                flat.append(test)
+    if any(isinstance(test, Const) for test in flat):
+        # a literalized identity: its relational tests go with it (measured: ``{ <y> > 2 }``
+        # behind a function's value becomes ``4``)
+        flat = [test for test in flat if not isinstance(test, Relational)]
+    if len(flat) == 1:
+        return flat[0]
+    flat.sort(key=lambda t: 0 if isinstance(t, Var | Const) else 1)
+    return Conjunction(tuple(flat))
+
+
+def _negation(vz: Variablizer, element: Condition | ConjunctiveNegation,
+              step: Step) -> ConditionElement:
+    if isinstance(element, ConjunctiveNegation):
+        return ConjunctiveNegation(tuple(_negation(vz, inner, step)  # type: ignore[misc]
+                                         for inner in element.conditions))
+    tests = [vz.test(getattr(element, field), step, lhs=False) for field in FIELDS]
+    is_state = isinstance(tests[0], Var) and isinstance(
+        step.bindings.get(equality_var(element.id_test) or ""), Identifier) and bool(
+        step.bindings[equality_var(element.id_test) or ""].is_state)  # type: ignore[union-attr]
+    return Condition(tests[0], tests[1], tests[2], element.negated, element.acceptable,
+                     "state" if is_state else None)
+
+
+def _action(vz: Variablizer, action: MakeAction, step: Step) -> MakeAction:
+    def value(node: RhsValue) -> RhsValue:
+        if isinstance(node, Var):
+            return vz.var(step, node.name, lhs=False)  # type: ignore[return-value]
+        if isinstance(node, FuncCall):
+            return FuncCall(node.name, tuple(value(arg) for arg in node.args))
+        return node
+
+    ident = value(action.id)
+    assert isinstance(ident, Var), ident
+    referent = value(action.referent) if action.referent is not None else None
+    return MakeAction(ident, value(action.attr), value(action.value), action.preference,
+                      referent)

@@ -1,0 +1,158 @@
+"""When a result is returned, learn a chunk as Soar 9.6 does, or leave the justification.
+
+`Chunker.learn` is called with the justification the agent just made for a substate's
+results. With learning on for that state it explains the results (`backtrace`), builds the
+chunk (`build`), and, unless the kernel would refuse it, adds it to the matcher with its
+current match *refracted* (the kernel's chunk instantiation is the one that supports the
+results, so that match does not fire again): the justification is renamed to the chunk and
+keeps supporting the results, retracting when the chunk's match goes. Every other match of
+the new chunk is queued, to fire in the next cycle. The kernel's names (measured):
+``chunk*<rule>*t<decision>-<n>``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+from ..errors import SoarError
+from ..production import Production, duplicate_key, same_production
+from .backtrace import NotExplained, explain
+from .build import build_chunk
+
+if TYPE_CHECKING:
+    from ..agent import Agent
+    from ..goals import Goal
+    from ..instantiation import Instantiation
+    from ..preferences import Preference
+
+
+@dataclass
+class ChunkRecord:
+    """What ``explain`` shows of a chunk: where it came from."""
+
+    name: str
+    decision: int
+    state: str
+    firings: list[str]
+    conditions: int
+    actions: int
+
+
+@dataclass
+class ChunkStats:
+    """The counters of ``chunk stats`` that this engine keeps."""
+
+    learned: int = 0
+    justifications: int = 0
+    substates: int = 0
+    firings_analyzed: int = 0
+    duplicates: int = 0
+    quiescence: int = 0
+    no_grounds: int = 0
+    local_negations: int = 0
+    failed: int = 0
+
+
+@dataclass
+class Chunker:
+    """Per-agent chunking state: records of the chunks learned, counters, name counts."""
+
+    records: dict[str, ChunkRecord] = field(default_factory=dict)
+    stats: ChunkStats = field(default_factory=ChunkStats)
+    counts: dict[tuple[str, int], int] = field(default_factory=dict)
+    messages: list[str] = field(default_factory=list)
+    #: states where ``force-learn`` / ``dont-learn`` were called (for ``only`` / ``except``)
+    forced: set[object] = field(default_factory=set)
+    refused: set[object] = field(default_factory=set)
+
+    def allowed(self, agent: Agent, goal: Goal) -> bool:
+        mode = agent.learning
+        if mode == "always":
+            return True
+        if mode == "only":
+            return goal.id in self.forced
+        if mode == "except":
+            return goal.id not in self.refused
+        return False
+
+    def learn(self, agent: Agent, just: Instantiation, results: list[Preference],
+              goal: Goal) -> bool:
+        """Turn ``just`` into a chunk's instantiation when the kernel would; whether it did."""
+        if not self.allowed(agent, goal):
+            return False
+        self.stats.substates += 1
+        try:
+            ex = explain(agent, results, goal.level)
+        except NotExplained as reason:
+            return self._fail(agent, str(reason))
+        self.stats.firings_analyzed += len(ex.steps)
+        self.stats.local_negations += bool(ex.local_negations)
+        if ex.quiescence:
+            self.stats.quiescence += 1
+            return False
+        if not ex.grounds:
+            self.stats.no_grounds += 1
+            return False
+        name = self._name(agent, results[-1].inst if results else just)
+        try:
+            production = build_chunk(ex, name)
+        except SoarError as error:
+            return self._fail(agent, f"{name}: {error}")
+        if self._duplicate(agent, production):
+            self.stats.duplicates += 1
+            return False
+        if not self._add(agent, production, {id(g.wme) for g in ex.grounds.values()}):
+            return self._fail(agent, f"{name} does not match the working memory it was "
+                              "learned from; a justification stands in")
+        just.name = name
+        self.stats.learned += 1
+        self.records[name] = ChunkRecord(
+            name, agent._decisions, str(goal.id),
+            [step.inst.name for step in ex.steps.values()],
+            len(production.conditions), len(production.actions))
+        return True
+
+    def _name(self, agent: Agent, inst: Instantiation) -> str:
+        base = inst.name
+        decision = agent._decisions
+        count = self.counts.get((base, decision), 0) + 1
+        self.counts[(base, decision)] = count
+        return f"chunk*{base}*t{decision}-{count}"
+
+    def _fail(self, agent: Agent, message: str) -> bool:
+        self.stats.failed += 1
+        self.messages.append(message)
+        if agent.trace_level >= 2 and agent.warnings:
+            agent._emit_line(f"Warning: chunking: {message}\n")
+        return False
+
+    @staticmethod
+    def _duplicate(agent: Agent, production: Production) -> bool:
+        for other in agent._by_shape.get(duplicate_key(production), ()):
+            if same_production(agent._productions[other].production, production):
+                return True
+        return False
+
+    @staticmethod
+    def _add(agent: Agent, production: Production, grounds: set[int]) -> bool:
+        """Add the chunk; refract its match of ``grounds`` (the WMEs it was learned from),
+        queue the others. False (and the chunk excised) when that match is missing."""
+        agent._add_production(production)
+        new, gone = agent.matcher.take_changes()
+        assert not gone, "a new production retracts nothing"
+        rest = []
+        refracted = False
+        for match in new:
+            wmes = {id(w) for w in match.wmes if w is not None}
+            if not refracted and match.production.name == production.name and wmes == grounds:
+                refracted = True
+                continue
+            rest.append(match)
+        if not refracted:
+            agent.excise(production.name)
+            agent.matcher.take_changes()
+            return False
+        if rest:
+            agent._queue_matches(rest)
+        return True
