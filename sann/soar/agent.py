@@ -2547,6 +2547,8 @@ class Agent:
             inst, inst.goal.level, through_o_support=True, visited=visited,
             also=[pref.inst for pref in results if pref.inst is not inst],
         ))
+        # explained before the results' identifiers are promoted (they are local to it)
+        explained = self.chunker.explain(self, inst, results)
         self._promote(results)
         if not grounds:
             self._ignore_unconditional_justification(inst)
@@ -2554,8 +2556,8 @@ class Agent:
         home = inst.goal.superstate
         assert home is not None  # results come from substates
         just = self._make_justification(inst, results, grounds, home, inst)
-        if self.learning != "never":
-            self.chunker.learn(self, just, results, inst.goal)
+        if explained is not None:
+            self.chunker.learn(self, just, explained)
         if self._watch_negations(just, visited, inst.goal.level):
             self._justification_matches(inst.goal, min(self._level_of(p.id) for p in results))
         while home.superstate is not None:

@@ -36,6 +36,7 @@ from .identity import Identities
 
 if TYPE_CHECKING:
     from ..agent import Agent
+    from ..goals import Goal
     from ..instantiation import Instantiation
 
 ITEM_ATTRS = ("item", "non-numeric")
@@ -71,12 +72,15 @@ class Ground:
 class Explanation:
     """What backtracing found, for `build` to turn into a production."""
 
+    #: the instantiation whose firing returned the results (the chunk is named after it)
+    fired: Instantiation
+    goal: Goal
     level: int
     ids: Identities = field(default_factory=Identities)
     steps: dict[int, Step] = field(default_factory=dict)
     grounds: dict[int, Ground] = field(default_factory=dict)
     negations: list[tuple[Condition | ConjunctiveNegation, Step]] = field(default_factory=list)
-    constraints: list[tuple[Hashable, Relational, Step]] = field(default_factory=list)
+    constraints: list[tuple[Hashable, Relational, Step, Symbol]] = field(default_factory=list)
     results: list[tuple[Preference, MakeAction, Step]] = field(default_factory=list)
     local_negations: int = 0
     quiescence: bool = False
@@ -89,11 +93,14 @@ class Explanation:
         return (step.n, name)
 
 
-def explain(agent: Agent, results: list[Preference], level: int) -> Explanation:
-    """Backtrace ``results`` (made at goal ``level``) through the rule firings behind them."""
-    ex = Explanation(level)
+def explain(agent: Agent, fired: Instantiation, results: list[Preference]) -> Explanation:
+    """Backtrace ``results`` (returned by the firing of ``fired``) through the rule firings
+    behind them."""
+    ex = Explanation(fired, fired.goal, fired.goal.level)
     queue: list[Step] = []
     for pref in results:
+        if pref.inst is None:  # an o-reject, done with when it was asserted
+            continue
         step = _step(agent, ex, pref.inst, queue)
         action = step.actions.get(id(pref))
         if action is None:
@@ -239,9 +246,10 @@ def _local(agent: Agent, ex: Explanation, step: Step, cond: Condition, wme: WME,
     """A local WME: unify the condition with the action that made it, and explain that
     action's instantiation in turn."""
     keys = [_field_key(ex, step, getattr(cond, name), f"{k}{name}") for name in FIELDS]
-    for key, name in zip(keys, FIELDS, strict=True):
+    values = (wme.id, wme.attr, wme.value)
+    for key, name, value in zip(keys, FIELDS, values, strict=True):
         for rel in _relationals(getattr(cond, name)):
-            ex.constraints.append((key, rel, step))
+            ex.constraints.append((key, rel, step, value))
     sources = agent._supporting_instantiations(wme)
     if not sources:
         return  # made by the architecture: nothing behind it

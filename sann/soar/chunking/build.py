@@ -12,8 +12,10 @@ action fails, and a justification stands in).
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Hashable
 
+from ..errors import SoarSemanticError, SoarWarning
 from ..memory import Identifier
 from ..printer import format_production
 from ..production import (
@@ -30,6 +32,7 @@ from ..production import (
     Test,
     Var,
 )
+from ..rhs import FUNCTIONS
 from ..syntax import parse_production
 from .backtrace import FIELDS, Explanation, Ground, Step, equality_var
 
@@ -100,7 +103,14 @@ def build_chunk(ex: Explanation, name: str) -> Production:
     conditions.sort(key=lambda c: 0 if isinstance(c, Condition) and c.goal else 1)
     actions = [_action(vz, action, step) for _, action, step in ex.results]
     production = Production(name, tuple(conditions), tuple(actions), flags=("chunk",))
-    return parse_production(format_production(production), f"<chunk {name}>")
+    with warnings.catch_warnings():
+        # the parser's warnings (an unconnected condition) refuse a chunk
+        warnings.simplefilter("error", SoarWarning)
+        try:
+            return parse_production(format_production(production), f"<chunk {name}>",
+                                    FUNCTIONS.keys())
+        except SoarWarning as warning:
+            raise SoarSemanticError(str(warning)) from None
 
 
 def _merge(ex: Explanation, ground: Ground) -> None:
@@ -136,16 +146,40 @@ def _add_constraints(vz: Variablizer, ex: Explanation,
             var = equality_var(getattr(cond, field))
             if var is not None:
                 where.setdefault(ex.ids.find(ex.key(step, var)), (index, field))
-    for key, rel, step in ex.constraints:
-        root = ex.ids.find(key)
-        if ex.ids.is_literal(key) or root not in where:
+    for key, rel, step, value in ex.constraints:
+        target = _placed(vz, ex, key, rel, step, value, where)
+        if target is None:
             continue
-        index, field = where[root]
+        (index, field), test = target
         cond = conditions[index]
         assert isinstance(cond, Condition)
-        mapped = vz.test(rel, step)
-        new = _conjoin([getattr(cond, field), mapped])
-        conditions[index] = _replace(cond, field, new)
+        conditions[index] = _replace(cond, field, _conjoin([getattr(cond, field), test]))
+
+
+#: ``a op b`` is ``b (inverse op) a``
+_INVERSE = {"<": ">", ">": "<", "<=": ">=", ">=": "<=", "<>": "<>", "<=>": "<=>"}
+
+
+def _placed(vz: Variablizer, ex: Explanation, key: Hashable, rel: Relational, step: Step,
+            value: object, where: dict[Hashable, tuple[int, str]]
+            ) -> tuple[tuple[int, str], Test] | None:
+    """Where a constraint goes and as what test: on its own identity's ground field, or,
+    when that identity is a literal, inverted onto its operand's (measured in soar_sml:
+    ``^top { <t> < <b> }`` with the top literalized to 5 gives the chunk ``^digit2 { <d1>
+    > 5 }``). None when no ground tests either identity (the constraint is dropped)."""
+    root = ex.ids.find(key)
+    if not ex.ids.is_literal(key) and root in where:
+        return where[root], vz.test(rel, step)
+    operand = rel.operand
+    if not isinstance(operand, Var) or rel.op not in _INVERSE:
+        return None
+    other = ex.key(step, operand.name)
+    other_root = ex.ids.find(other)
+    if ex.ids.is_literal(other) or other_root not in where:
+        return None
+    if not ex.ids.is_literal(key) or isinstance(value, Identifier):
+        return None
+    return where[other_root], Relational(_INVERSE[rel.op], Const(value))  # type: ignore[arg-type]
 
 
 def _replace(cond: Condition, field: str, test: Test) -> Condition:

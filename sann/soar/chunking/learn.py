@@ -12,12 +12,13 @@ the new chunk is queued, to fire in the next cycle. The kernel's names (measured
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from ..errors import SoarError
 from ..production import Production, duplicate_key, same_production
-from .backtrace import NotExplained, explain
+from .backtrace import Explanation, NotExplained, explain
 from .build import build_chunk
 
 if TYPE_CHECKING:
@@ -25,6 +26,15 @@ if TYPE_CHECKING:
     from ..goals import Goal
     from ..instantiation import Instantiation
     from ..preferences import Preference
+
+
+_CHUNK_PREFIX = re.compile(r"chunk(?:x(\d+))?\*")
+_CHUNK_SUFFIX = re.compile(r"(\*(Tie|OpNoChange|StateNoChange|Conflict|ConstraintFailure))?"
+                           r"\*t\d+-\d+$")
+#: the impasse of the state a chunk is learned for, as its name shows it
+_IMPASSE_NAMES = {("tie", "operator"): "Tie", ("no-change", "operator"): "OpNoChange",
+                  ("no-change", "state"): "StateNoChange", ("conflict", "operator"): "Conflict",
+                  ("constraint-failure", "operator"): "ConstraintFailure"}
 
 
 @dataclass
@@ -60,7 +70,7 @@ class Chunker:
 
     records: dict[str, ChunkRecord] = field(default_factory=dict)
     stats: ChunkStats = field(default_factory=ChunkStats)
-    counts: dict[tuple[str, int], int] = field(default_factory=dict)
+    counts: dict[int, int] = field(default_factory=dict)
     messages: list[str] = field(default_factory=list)
     #: states where ``force-learn`` / ``dont-learn`` were called (for ``only`` / ``except``)
     forced: set[object] = field(default_factory=set)
@@ -76,16 +86,23 @@ class Chunker:
             return goal.id not in self.refused
         return False
 
-    def learn(self, agent: Agent, just: Instantiation, results: list[Preference],
-              goal: Goal) -> bool:
-        """Turn ``just`` into a chunk's instantiation when the kernel would; whether it did."""
-        if not self.allowed(agent, goal):
-            return False
+    def explain(self, agent: Agent, inst: Instantiation,
+                results: list[Preference]) -> Explanation | None:
+        """The explanation of the ``results`` that ``inst``'s firing returned, when
+        learning is on in its state (else None); made before the results' identifiers
+        leave the substate."""
+        goal = inst.goal
+        if agent.learning == "never" or not self.allowed(agent, goal):
+            return None
         self.stats.substates += 1
         try:
-            ex = explain(agent, results, goal.level)
+            return explain(agent, inst, results)
         except NotExplained as reason:
-            return self._fail(agent, str(reason))
+            self._fail(agent, str(reason))
+            return None
+
+    def learn(self, agent: Agent, just: Instantiation, ex: Explanation) -> bool:
+        """Turn ``just`` into a chunk's instantiation when the kernel would; whether it did."""
         self.stats.firings_analyzed += len(ex.steps)
         self.stats.local_negations += bool(ex.local_negations)
         if ex.quiescence:
@@ -94,7 +111,7 @@ class Chunker:
         if not ex.grounds:
             self.stats.no_grounds += 1
             return False
-        name = self._name(agent, results[-1].inst if results else just)
+        name = self._name(agent, ex.fired, ex.goal.superstate)
         try:
             production = build_chunk(ex, name)
         except SoarError as error:
@@ -108,17 +125,29 @@ class Chunker:
         just.name = name
         self.stats.learned += 1
         self.records[name] = ChunkRecord(
-            name, agent._decisions, str(goal.id),
+            name, agent._decisions, str(ex.goal.id),
             [step.inst.name for step in ex.steps.values()],
             len(production.conditions), len(production.actions))
         return True
 
-    def _name(self, agent: Agent, inst: Instantiation) -> str:
-        base = inst.name
+    def _name(self, agent: Agent, fired: Instantiation, home: Goal | None) -> str:
+        """``chunk*<rule>[*<impasse of the chunk's state>]*t<decision>-<n>`` (measured:
+        ``chunk*sub*a*t2-1`` for a result on the top state,
+        ``chunk*look-ahead*evaluate*symbolic*Tie*t50-1`` on a tie's state, ``-n`` counting
+        the chunks of the decision); a chunk learned from a chunk's firing is
+        ``chunkx2*...`` (and so on), named after the rule the first chunk came from."""
+        base, times = fired.name, 0
+        prefix = _CHUNK_PREFIX.match(base)
+        if prefix is not None:
+            times = int(prefix.group(1) or 1)
+            base = _CHUNK_SUFFIX.sub("", base[prefix.end():])
         decision = agent._decisions
-        count = self.counts.get((base, decision), 0) + 1
-        self.counts[(base, decision)] = count
-        return f"chunk*{base}*t{decision}-{count}"
+        count = self.counts.get(decision, 0) + 1
+        self.counts = {decision: count}
+        head = "chunk" if times == 0 else f"chunkx{times + 1}"
+        impasse = _IMPASSE_NAMES.get((home.impasse, home.attribute)) if home else None
+        middle = f"*{impasse}" if impasse else ""
+        return f"{head}*{base}{middle}*t{decision}-{count}"
 
     def _fail(self, agent: Agent, message: str) -> bool:
         self.stats.failed += 1
