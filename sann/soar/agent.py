@@ -2555,9 +2555,11 @@ class Agent:
             return
         home = inst.goal.superstate
         assert home is not None  # results come from substates
-        just = self._make_justification(inst, results, grounds, home, inst)
-        if explained is not None:
-            self.chunker.learn(self, just, explained)
+        chunk = self.chunker.build(self, explained) if explained is not None else None
+        just = self._make_justification(inst, results, grounds, home, inst,
+                                        None if chunk is None else chunk.name)
+        if chunk is not None:
+            self.chunker.learn(self, just, explained, chunk)
         if self._watch_negations(just, visited, inst.goal.level):
             self._justification_matches(inst.goal, min(self._level_of(p.id) for p in results))
         while home.superstate is not None:
@@ -2579,12 +2581,13 @@ class Agent:
 
     def _make_justification(
         self, inst: Instantiation, results: list[Preference], grounds: tuple[WME, ...],
-        home: Goal, fired: Instantiation,
+        home: Goal, fired: Instantiation, chunk: str | None = None,
     ) -> Instantiation:
         """A justification at ``home`` for ``inst``'s results; its support is computed like
         a rule's: o-support when its conditions include the selected operator of its goal.
         ``fired``: the rule instantiation whose firing made it (its preferences are
-        asserted next to that one's, see ``_with_justifications``)."""
+        asserted next to that one's, see ``_with_justifications``); ``chunk``: the name
+        of the chunk learned from it, which its instantiation is (see `Chunker`)."""
         self._justifications += 1
         match_goal_id = self._goal_of_grounds(grounds).id
         operators = [
@@ -2595,7 +2598,8 @@ class Agent:
         just = Instantiation(
             # the kernel spends two numbers on each justification (measured: justify1,
             # justify3, justify5, ...)
-            f"justify{2 * self._justifications - 1}", None, home, grounds, bool(operators), True
+            chunk or f"justify{2 * self._justifications - 1}", None, home, grounds,
+            bool(operators), True
         )
         just.grounds = grounds
         just.source = inst.goal
@@ -2604,7 +2608,7 @@ class Agent:
             operators = []  # a proposal is i-supported, as a rule's (see is_o_supported)
         on_operator = [any(pref.id is op for op in operators) for pref in results]
         mixed = bool(operators) and any(on_operator) and not all(on_operator)
-        if mixed:
+        if mixed and chunk is None:  # a chunk's own instantiation is not warned of (measured)
             self._warn_mixed_support(just.name, justification=True)
         for pref, elaborates in zip(results, on_operator, strict=True):
             copy = Preference(pref.type, pref.id, pref.attr, pref.value, pref.referent, just)

@@ -101,31 +101,39 @@ class Chunker:
             self._fail(agent, str(reason))
             return None
 
-    def learn(self, agent: Agent, just: Instantiation, ex: Explanation) -> bool:
-        """Turn ``just`` into a chunk's instantiation when the kernel would; whether it did."""
+    def build(self, agent: Agent, ex: Explanation) -> Production | None:
+        """The chunk of an explanation, unless the kernel would not learn it (then a
+        justification stands in)."""
         self.stats.firings_analyzed += len(ex.steps)
         self.stats.local_negations += bool(ex.local_negations)
         if ex.quiescence:
             self.stats.quiescence += 1
-            return False
+            return None
         if not ex.grounds:
             self.stats.no_grounds += 1
-            return False
+            return None
         name = self._name(agent, ex.fired, ex.goal.superstate)
         try:
             production = build_chunk(ex, name)
         except SoarError as error:
-            return self._fail(agent, f"{name}: {error}")
+            self._fail(agent, f"{name}: {error}")
+            return None
         if self._duplicate(agent, production):
             self.stats.duplicates += 1
-            return False
+            return None
+        return production
+
+    def learn(self, agent: Agent, just: Instantiation, ex: Explanation,
+              production: Production) -> bool:
+        """Add the chunk, whose instantiation ``just`` is; whether it could (when its match
+        is not there, ``just`` is a plain justification)."""
         if not self._add(agent, production, {id(g.wme) for g in ex.grounds.values()}):
-            return self._fail(agent, f"{name} does not match the working memory it was "
-                              "learned from; a justification stands in")
-        just.name = name
+            just.name = f"justify{2 * agent._justifications - 1}"
+            return self._fail(agent, f"{production.name} does not match the working memory "
+                              "it was learned from; a justification stands in")
         self.stats.learned += 1
-        self.records[name] = ChunkRecord(
-            name, agent._decisions, str(ex.goal.id),
+        self.records[production.name] = ChunkRecord(
+            production.name, agent._decisions, str(ex.goal.id),
             [step.inst.name for step in ex.steps.values()],
             len(production.conditions), len(production.actions))
         return True
