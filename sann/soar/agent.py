@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import TextIO, cast
 
 from . import decide as dec
-from .chunking import Chunker
+from .chunking import Chunker, Explanation
 from .errors import SoarError, SoarRuntimeError
 from .goals import Goal
 from .instantiation import (
@@ -2555,11 +2555,7 @@ class Agent:
             return
         home = inst.goal.superstate
         assert home is not None  # results come from substates
-        chunk = self.chunker.build(self, explained) if explained is not None else None
-        just = self._make_justification(inst, results, grounds, home, inst,
-                                        None if chunk is None else chunk.name)
-        if chunk is not None:
-            self.chunker.learn(self, just, explained, chunk)
+        just, learned = self._justify_or_learn(inst, results, grounds, home, inst, explained)
         if self._watch_negations(just, visited, inst.goal.level):
             self._justification_matches(inst.goal, min(self._level_of(p.id) for p in results))
         while home.superstate is not None:
@@ -2575,9 +2571,27 @@ class Agent:
             # the negated conditions of every rule behind it (the first is the previous
             # justification itself)
             visited += more[1:]
+            # a chunk's instantiation with results higher up is explained in turn (the
+            # kernel's chunkx2*...)
+            explained = self.chunker.explain(self, just, higher) if learned else None
             source, home = home, home.superstate
-            just = self._make_justification(just, higher, grounds, home, inst)
+            just, learned = self._justify_or_learn(just, higher, grounds, home, inst,
+                                                   explained)
             self._watch_negations(just, visited, source.level)
+
+    def _justify_or_learn(
+        self, made_by: Instantiation, results: list[Preference], grounds: tuple[WME, ...],
+        home: Goal, fired: Instantiation, explained: Explanation | None,
+    ) -> tuple[Instantiation, bool]:
+        """The justification at ``home`` for ``made_by``'s results, which is the
+        instantiation of the chunk learned from ``explained`` when there is one (see
+        `Chunker`); whether a chunk was learned."""
+        chunk = self.chunker.build(self, explained) if explained is not None else None
+        just = self._make_justification(made_by, results, grounds, home, fired,
+                                        None if chunk is None else chunk.name)
+        if chunk is None or explained is None:
+            return just, False
+        return just, self.chunker.learn(self, just, explained, chunk)
 
     def _make_justification(
         self, inst: Instantiation, results: list[Preference], grounds: tuple[WME, ...],

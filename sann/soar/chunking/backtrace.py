@@ -58,6 +58,8 @@ class Step:
     production: Production
     bindings: dict[str, Symbol]
     actions: dict[int, MakeAction]
+    #: the WME each condition matched (None for negations)
+    wmes: tuple[WME | None, ...] = ()
 
 
 @dataclass
@@ -117,16 +119,24 @@ def _step(agent: Agent, ex: Explanation, inst: Instantiation, queue: list[Step])
     step = ex.steps.get(id(inst))
     if step is not None:
         return step
-    match = inst.match
-    if inst.is_justification or match is None:
+    match = _match_of(agent, inst)
+    if match is None:
         raise NotExplained(f"{inst.name} is not a rule firing")
     production: Production = match.production  # type: ignore[attr-defined]
     bindings = dict(match.bindings)  # type: ignore[attr-defined]
     actions = _align(production, inst, bindings)
-    step = Step(len(ex.steps), inst, production, bindings, actions)
+    step = Step(len(ex.steps), inst, production, bindings, actions,
+                match.wmes)  # type: ignore[attr-defined]
     ex.steps[id(inst)] = step
     queue.append(step)
     return step
+
+
+def _match_of(agent: Agent, inst: Instantiation) -> object | None:
+    """The match of a rule firing, or of a chunk's own instantiation (see `Chunker`)."""
+    if inst.is_justification:
+        return agent.chunker.matches.get(inst)
+    return inst.match
 
 
 def _align(production: Production, inst: Instantiation,
@@ -178,7 +188,7 @@ def same_symbol(a: object, b: object) -> bool:
 
 
 def _backtrace_step(agent: Agent, ex: Explanation, step: Step, queue: list[Step]) -> None:
-    wmes = step.inst.wmes
+    wmes = step.wmes
     for k, element in enumerate(step.production.conditions):
         if isinstance(element, ConjunctiveNegation):
             _negation(agent, ex, step, element, _ncc_ids(element, step))
@@ -254,7 +264,7 @@ def _local(agent: Agent, ex: Explanation, step: Step, cond: Condition, wme: WME,
     if not sources:
         return  # made by the architecture: nothing behind it
     source = sources[0]
-    if source.is_justification or source.match is None:
+    if _match_of(agent, source) is None:
         return
     pref = _pref_of(source, wme)
     if pref is None:

@@ -45,6 +45,7 @@ class Variablizer:
         self.names: dict[Hashable, str] = {}
         self.counts: dict[str, int] = {}
         self.bound: set[Hashable] = set()
+        self.goal: Identifier | None = None
 
     def name(self, root: Hashable, hint: str) -> str:
         found = self.names.get(root)
@@ -89,16 +90,20 @@ def build_chunk(ex: Explanation, name: str) -> Production:
     """The chunk of an explanation, parsed and checked (raises the parser's error)."""
     grounds = list(ex.grounds.values())
     for ground in grounds:
-        _merge(ex, ground)
+        _join(ex, ground)
     vz = Variablizer(ex)
+    vz.goal = _match_goal(grounds)
     for ground in grounds:
-        cond, step = ground.tests[0]
-        for field in FIELDS:
-            var = equality_var(getattr(cond, field))
-            if var is not None:
-                vz.bound.add(ex.ids.find(ex.key(step, var)))
-    conditions: list[ConditionElement] = [_ground_condition(vz, g) for g in grounds]
-    _add_constraints(vz, ex, conditions)
+        for cond, step in ground.tests:
+            for field in FIELDS:
+                var = equality_var(getattr(cond, field))
+                if var is not None:
+                    vz.bound.add(ex.ids.find(ex.key(step, var)))
+    conditions: list[ConditionElement] = []
+    where: dict[Hashable, tuple[int, str]] = {}
+    for ground in grounds:
+        _ground_conditions(vz, ground, conditions, where)
+    _add_constraints(vz, ex, conditions, where)
     conditions.extend(_negation(vz, element, step) for element, step in ex.negations)
     conditions.sort(key=lambda c: 0 if isinstance(c, Condition) and c.goal else 1)
     actions = [_action(vz, action, step) for _, action, step in ex.results]
@@ -110,42 +115,86 @@ def build_chunk(ex: Explanation, name: str) -> Production:
             return parse_production(format_production(production), f"<chunk {name}>",
                                     FUNCTIONS.keys())
         except SoarWarning as warning:
-            raise SoarSemanticError(str(warning)) from None
+            raise SoarSemanticError(name, str(warning)) from None
 
 
-def _merge(ex: Explanation, ground: Ground) -> None:
-    """Conditions of several firings on one WME: one identity per field."""
+def _match_goal(grounds: list[Ground]) -> Identifier | None:
+    """The deepest state the grounds test: the only one the chunk tests as a ``state``
+    (measured in soar_sml: a chunk for the selection state is ``(state <s1> ^name selection
+    ^superstate <s2>) (<s2> ^name water-jug ...)``)."""
+    best: Identifier | None = None
+    for ground in grounds:
+        ident = ground.wme.id
+        if isinstance(ident, Identifier) and ident.is_state and (
+                best is None or (ident.level or 0) > (best.level or 0)):
+            best = ident
+    return best
+
+
+def _join(ex: Explanation, ground: Ground) -> None:
+    """Conditions of several firings on one WME: their identities field by field become
+    one, unless one is a literal (measured in soar_sml: the selection space's
+    ``(<ts> ^<state-att> <id>)`` on ``(S1 ^jug J1)`` stays ``^<a1> <j1>`` beside ``^jug {
+    <j1> <=> <s1> }``, whose attribute was literalized)."""
     first, step0 = ground.tests[0]
     for cond, step in ground.tests[1:]:
         for field in FIELDS:
             a, b = equality_var(getattr(first, field)), equality_var(getattr(cond, field))
-            if a is not None and b is not None:
-                ex.ids.union(ex.key(step0, a), ex.key(step, b))
+            if a is None or b is None:
+                continue
+            ka, kb = ex.key(step0, a), ex.key(step, b)
+            if not ex.ids.is_literal(ka) and not ex.ids.is_literal(kb):
+                ex.ids.union(ka, kb)
 
 
-def _ground_condition(vz: Variablizer, ground: Ground) -> Condition:
-    fields: list[Test] = []
-    for field in FIELDS:
-        parts: list[Test] = []
-        for cond, step in ground.tests:
-            parts.append(vz.test(getattr(cond, field), step))
-        fields.append(_conjoin(parts))
-    is_state = isinstance(ground.wme.id, Identifier) and ground.wme.id.is_state
-    return Condition(fields[0], fields[1], fields[2], acceptable=ground.wme.acceptable,
-                     goal="state" if is_state else None)
-
-
-def _add_constraints(vz: Variablizer, ex: Explanation,
-                     conditions: list[ConditionElement]) -> None:
-    """Relational tests of local conditions, on the ground field that binds their identity
-    (dropped when the identity was literalized or no ground tests it)."""
-    where: dict[Hashable, tuple[int, str]] = {}
-    for index, ground in enumerate(ex.grounds.values()):
-        cond, step = ground.tests[0]
+def _ground_conditions(vz: Variablizer, ground: Ground, conditions: list[ConditionElement],
+                       where: dict[Hashable, tuple[int, str]]) -> None:
+    """The conditions of one ground: those whose equality tests came out the same are
+    merged (their other tests together), the others stay apart."""
+    is_state = ground.wme.id is vz.goal
+    merged: dict[tuple, int] = {}
+    for cond, step in ground.tests:
+        fields = [vz.test(getattr(cond, field), step) for field in FIELDS]
+        if _equality(fields[2]) is None:
+            # the kernel gives a value test without an equality test a variable (measured:
+            # ``^max-look-ahead-depth { <m1> < 5 }``)
+            attr = fields[1]
+            hint = str(attr.value) if isinstance(attr, Const) else "v"
+            fresh = Var(vz.name(("fresh", len(conditions), id(cond)), hint))
+            fields[2] = _conjoin([fresh, fields[2]])
+        signature = tuple(_equality(test) for test in fields)
+        index = merged.get(signature)
+        if index is None:
+            index = merged[signature] = len(conditions)
+            conditions.append(Condition(fields[0], fields[1], fields[2],
+                                        acceptable=ground.wme.acceptable,
+                                        goal="state" if is_state else None))
+        else:
+            old = conditions[index]
+            assert isinstance(old, Condition)
+            conditions[index] = Condition(
+                *(_conjoin([getattr(old, f), t]) for f, t in zip(FIELDS, fields, strict=True)),
+                acceptable=old.acceptable, goal=old.goal)
         for field in FIELDS:
             var = equality_var(getattr(cond, field))
             if var is not None:
-                where.setdefault(ex.ids.find(ex.key(step, var)), (index, field))
+                where.setdefault(vz.ex.ids.find(vz.ex.key(step, var)), (index, field))
+
+
+def _equality(test: Test) -> object:
+    if isinstance(test, Var | Const):
+        return test
+    if isinstance(test, Conjunction):
+        for part in test.tests:
+            if isinstance(part, Var | Const):
+                return part
+    return None
+
+
+def _add_constraints(vz: Variablizer, ex: Explanation, conditions: list[ConditionElement],
+                     where: dict[Hashable, tuple[int, str]]) -> None:
+    """Relational tests of local conditions, on the ground field that binds their identity
+    (dropped when the identity was literalized or no ground tests it)."""
     for key, rel, step, value in ex.constraints:
         target = _placed(vz, ex, key, rel, step, value, where)
         if target is None:
@@ -212,9 +261,7 @@ def _negation(vz: Variablizer, element: Condition | ConjunctiveNegation,
         return ConjunctiveNegation(tuple(_negation(vz, inner, step)  # type: ignore[misc]
                                          for inner in element.conditions))
     tests = [vz.test(getattr(element, field), step, lhs=False) for field in FIELDS]
-    is_state = isinstance(tests[0], Var) and isinstance(
-        step.bindings.get(equality_var(element.id_test) or ""), Identifier) and bool(
-        step.bindings[equality_var(element.id_test) or ""].is_state)  # type: ignore[union-attr]
+    is_state = step.bindings.get(equality_var(element.id_test) or "") is vz.goal
     return Condition(tests[0], tests[1], tests[2], element.negated, element.acceptable,
                      "state" if is_state else None)
 

@@ -75,6 +75,9 @@ class Chunker:
     #: states where ``force-learn`` / ``dont-learn`` were called (for ``only`` / ``except``)
     forced: set[object] = field(default_factory=set)
     refused: set[object] = field(default_factory=set)
+    #: the refracted match of each chunk's own instantiation (a justification here), for
+    #: explaining it when its results go higher still
+    matches: dict[Instantiation, object] = field(default_factory=dict)
 
     def allowed(self, agent: Agent, goal: Goal) -> bool:
         mode = agent.learning
@@ -127,10 +130,12 @@ class Chunker:
               production: Production) -> bool:
         """Add the chunk, whose instantiation ``just`` is; whether it could (when its match
         is not there, ``just`` is a plain justification)."""
-        if not self._add(agent, production, {id(g.wme) for g in ex.grounds.values()}):
+        match = self._add(agent, production, {id(g.wme) for g in ex.grounds.values()})
+        if match is None:
             just.name = f"justify{2 * agent._justifications - 1}"
             return self._fail(agent, f"{production.name} does not match the working memory "
                               "it was learned from; a justification stands in")
+        self.matches[just] = match
         self.stats.learned += 1
         self.records[production.name] = ChunkRecord(
             production.name, agent._decisions, str(ex.goal.id),
@@ -172,24 +177,26 @@ class Chunker:
         return False
 
     @staticmethod
-    def _add(agent: Agent, production: Production, grounds: set[int]) -> bool:
+    def _add(agent: Agent, production: Production, grounds: set[int]) -> object | None:
         """Add the chunk; refract its match of ``grounds`` (the WMEs it was learned from),
-        queue the others. False (and the chunk excised) when that match is missing."""
+        queue the others; return the refracted match. None (and the chunk excised) when
+        that match is missing."""
         agent._add_production(production)
         new, gone = agent.matcher.take_changes()
         assert not gone, "a new production retracts nothing"
         rest = []
-        refracted = False
+        refracted = None
         for match in new:
             wmes = {id(w) for w in match.wmes if w is not None}
-            if not refracted and match.production.name == production.name and wmes == grounds:
-                refracted = True
+            if refracted is None and match.production.name == production.name and (
+                    wmes == grounds):
+                refracted = match
                 continue
             rest.append(match)
-        if not refracted:
+        if refracted is None:
             agent.excise(production.name)
             agent.matcher.take_changes()
-            return False
+            return None
         if rest:
             agent._queue_matches(rest)
-        return True
+        return refracted
