@@ -2242,6 +2242,8 @@ class Agent:
         wme = slot.wmes[_vkey(value)] = self._add_wme(goal.id, "operator", value)
         if goal.level > 1:
             self._remember_source(wme, slot, (REQUIRE, ACCEPTABLE))
+            if self.learning != "never":
+                self.chunker.selected(self, wme, slot)
         name = self._operator_name(value)
         self._operator_names.append(name if name is not None else "?")
         self._collect_changes()  # before the WME trace: it may warn (measured)

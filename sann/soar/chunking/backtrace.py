@@ -18,7 +18,18 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from ..memory import WME, Identifier, Symbol
-from ..preferences import ACCEPTABLE, REQUIRE, Preference, preference_type
+from ..preferences import (
+    ACCEPTABLE,
+    BEST,
+    BETTER,
+    PROHIBIT,
+    REJECT,
+    REQUIRE,
+    WORSE,
+    WORST,
+    Preference,
+    preference_type,
+)
 from ..production import (
     Condition,
     Conjunction,
@@ -276,6 +287,22 @@ def _local(agent: Agent, ex: Explanation, step: Step, cond: Condition, wme: WME,
     for key, test, node in zip(keys, (cond.id_test, cond.attr_test, cond.value_test),
                                (action.id, action.attr, action.value), strict=True):
         _unify(ex, key, test, maker, node)
+    if wme.attr == "operator" and not wme.acceptable:
+        _selection_knowledge(agent, ex, wme, queue)
+
+
+#: the preferences that choose among operators (the kernel's ``add-osk``, on by default)
+SELECTION = (REJECT, PROHIBIT, REQUIRE, BEST, WORST, BETTER, WORSE)
+
+
+def _selection_knowledge(agent: Agent, ex: Explanation, wme: WME, queue: list[Step]) -> None:
+    """A selected operator of a substate is explained by the preferences that chose it too,
+    as they were when it was chosen (measured in soar_sml: a look-ahead's chunk tests the
+    ``^visited`` records that the reject chunks firing in the copied state tested,
+    rejecting the other operators)."""
+    for inst in agent.chunker.selection.get(wme, ()):
+        if _match_of(agent, inst) is not None:
+            _step(agent, ex, inst, queue)
 
 
 def _field_key(ex: Explanation, step: Step, test: Test, tag: str) -> Hashable:

@@ -17,15 +17,17 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from ..errors import SoarError
+from ..preferences import REQUIRE
 from ..production import Production, duplicate_key, same_production
-from .backtrace import Explanation, NotExplained, explain
+from .backtrace import SELECTION, Explanation, NotExplained, explain
 from .build import build_chunk
 
 if TYPE_CHECKING:
     from ..agent import Agent
     from ..goals import Goal
     from ..instantiation import Instantiation
-    from ..preferences import Preference
+    from ..memory import WME
+    from ..preferences import Preference, Slot
 
 
 _CHUNK_PREFIX = re.compile(r"chunk(?:x(\d+))?\*")
@@ -78,6 +80,23 @@ class Chunker:
     #: the refracted match of each chunk's own instantiation (a justification here), for
     #: explaining it when its results go higher still
     matches: dict[Instantiation, object] = field(default_factory=dict)
+    #: the instantiations of the preferences that chose each substate operator
+    selection: dict[WME, list[Instantiation]] = field(default_factory=dict)
+    selection_limit: int = 1024
+
+    def selected(self, agent: Agent, wme: WME, slot: Slot) -> None:
+        """A substate's operator was selected: note the preferences that chose it, what
+        the kernel's ``add-osk`` backtraces the selection through (see `backtrace`)."""
+        if len(self.selection) >= self.selection_limit:
+            wm = agent._wm
+            self.selection = {w: insts for w, insts in self.selection.items()
+                              if wm.get(w.timetag) is w}
+            self.selection_limit = max(1024, 2 * len(self.selection))
+        # a required operator is chosen by its require alone (measured in soar_sml: the
+        # look-ahead's ``+, !`` copy of the tied operator brings in no reject of the others)
+        types = (REQUIRE,) if slot.of_type(REQUIRE) else SELECTION
+        self.selection[wme] = [pref.inst for ptype in types
+                               for pref in slot.of_type(ptype) if pref.inst is not None]
 
     def allowed(self, agent: Agent, goal: Goal) -> bool:
         mode = agent.learning
