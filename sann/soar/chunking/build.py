@@ -132,13 +132,14 @@ def _match_goal(grounds: list[Ground]) -> Identifier | None:
 
 
 def _join(ex: Explanation, ground: Ground) -> None:
-    """Conditions of several firings on one WME: their identities field by field become
-    one, unless one is a literal (measured in soar_sml: the selection space's
-    ``(<ts> ^<state-att> <id>)`` on ``(S1 ^jug J1)`` stays ``^<a1> <j1>`` beside ``^jug {
-    <j1> <=> <s1> }``, whose attribute was literalized)."""
+    """Conditions of several firings on one WME: their identifier and value identities
+    become one, unless one is a literal; attribute identities stay apart (measured in
+    soar_sml: the selection space's ``(<ts> ^<state-att> <id>)`` on ``(S1 ^jug J1)``, once
+    per copied augmentation of J1, stays ``^<a1> <j1> ^<a3> <j1>`` beside ``^jug { <j1>
+    <=> <s1> }``, whose attribute was literalized)."""
     first, step0 = ground.tests[0]
     for cond, step in ground.tests[1:]:
-        for field in FIELDS:
+        for field in ("id_test", "value_test"):
             a, b = equality_var(getattr(first, field)), equality_var(getattr(cond, field))
             if a is None or b is None:
                 continue
