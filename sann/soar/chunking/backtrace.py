@@ -215,26 +215,30 @@ def _backtrace_step(agent: Agent, ex: Explanation, step: Step, queue: list[Step]
         if wme.attr in ITEM_ATTRS:
             proposal = agent._item_proposal(wme)
             if proposal is not wme:
-                _item_ground(ex, step, element, proposal, k)
+                stand_in = _stand_in(step, element, proposal, k)
+                if agent._level_of(proposal.id) < ex.level:
+                    _add_ground(ex, proposal, stand_in, step)
+                else:
+                    _local(agent, ex, step, stand_in, proposal, queue, k)
                 continue
         if agent._level_of(wme.id) < ex.level:
-            ground = ex.grounds.get(wme.timetag)
-            if ground is None:
-                ground = ex.grounds[wme.timetag] = Ground(wme)
-            ground.tests.append((element, step))
+            _add_ground(ex, wme, element, step)
             continue
         _local(agent, ex, step, element, wme, queue, k)
 
 
-def _item_ground(ex: Explanation, step: Step, cond: Condition, proposal: WME, k: int) -> None:
+def _stand_in(step: Step, cond: Condition, proposal: WME, k: int) -> Condition:
     """``(S2 ^item O2)`` stands for the superstate's ``(S1 ^operator O2 +)``."""
     name = f"item*{k}"
     step.bindings[name] = proposal.id
-    stand_in = Condition(Var(name), Const("operator"), cond.value_test, acceptable=True)
-    ground = ex.grounds.get(proposal.timetag)
+    return Condition(Var(name), Const("operator"), cond.value_test, acceptable=True)
+
+
+def _add_ground(ex: Explanation, wme: WME, cond: Condition, step: Step) -> None:
+    ground = ex.grounds.get(wme.timetag)
     if ground is None:
-        ground = ex.grounds[proposal.timetag] = Ground(proposal)
-    ground.tests.append((stand_in, step))
+        ground = ex.grounds[wme.timetag] = Ground(wme)
+    ground.tests.append((cond, step))
 
 
 def _bound_id(cond: Condition, step: Step) -> Symbol | None:
