@@ -46,6 +46,8 @@ class Variablizer:
         self.counts: dict[str, int] = {}
         self.bound: set[Hashable] = set()
         self.goal: Identifier | None = None
+        #: the negation being variablized: its local variables are its own
+        self.scope = 0
 
     def name(self, root: Hashable, hint: str) -> str:
         found = self.names.get(root)
@@ -67,8 +69,8 @@ class Variablizer:
         if not lhs and root not in self.bound:
             if isinstance(value, Identifier):  # a new identifier of the chunk
                 return Var(self.name(("new", value), name))
-            if value is None:  # local to a negation
-                return Var(self.name(("unbound", root), name))
+            if value is None:  # local to a negation (each its own)
+                return Var(self.name(("unbound", root, self.scope), name))
             return Const(value)  # type: ignore[arg-type]
         return Var(self.name(root, "s" if isinstance(key[0], str) else name))  # type: ignore[index]
 
@@ -104,7 +106,9 @@ def build_chunk(ex: Explanation, name: str) -> Production:
     for ground in grounds:
         _ground_conditions(vz, ground, conditions, where)
     _add_constraints(vz, ex, conditions, where)
-    conditions.extend(_negation(vz, element, step) for element, step in ex.negations)
+    for scope, (element, step) in enumerate(ex.negations, 1):
+        vz.scope = scope
+        conditions.append(_negation(vz, element, step))
     conditions.sort(key=lambda c: 0 if isinstance(c, Condition) and c.goal else 1)
     actions = [_action(vz, action, step) for _, action, step in ex.results]
     production = Production(name, tuple(conditions), tuple(actions), flags=("chunk",))
