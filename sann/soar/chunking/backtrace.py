@@ -99,10 +99,7 @@ class Explanation:
     quiescence: bool = False
 
     def key(self, step: Step, name: str) -> Hashable:
-        """The identity key of a variable of a step: a state is one identity."""
-        value = step.bindings.get(name)
-        if isinstance(value, Identifier) and value.is_state:
-            return ("state", value)
+        """The identity key of a variable of a step."""
         return (step.n, name)
 
 
@@ -216,6 +213,7 @@ def _backtrace_step(agent: Agent, ex: Explanation, step: Step, queue: list[Step]
             proposal = agent._item_proposal(wme)
             if proposal is not wme:
                 stand_in = _stand_in(step, element, proposal, k)
+                ex.ids.union(("state", proposal.id), ex.key(step, f"item*{k}"))
                 if agent._level_of(proposal.id) < ex.level:
                     _add_ground(ex, proposal, stand_in, step)
                 else:
@@ -276,8 +274,13 @@ def _local(agent: Agent, ex: Explanation, step: Step, cond: Condition, wme: WME,
         for rel in _relationals(getattr(cond, name)):
             ex.constraints.append((key, rel, step, value))
     sources = agent._supporting_instantiations(wme)
-    if not sources:
-        return  # made by the architecture: nothing behind it
+    if not sources:  # made by the architecture: nothing behind it
+        if wme.attr == "superstate" and isinstance(wme.value, Identifier):
+            # but every rule that reaches the superstate this way reaches one identity
+            # (measured in soar_sml: ``^superstate <ss>`` and ``^superstate <ss2>`` of two
+            # rules make one ``<s1>``, while a ``^top-state`` value stays its own)
+            ex.ids.union(("state", wme.value), keys[2])
+        return
     source = sources[0]
     if _match_of(agent, source) is None:
         return

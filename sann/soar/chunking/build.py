@@ -58,6 +58,19 @@ class Variablizer:
             found = self.names[root] = f"{letter}{count}"
         return found
 
+    def is_goal(self, ident: object, test: Test) -> bool:
+        """Whether a condition on ``ident`` tested as ``test`` is the chunk's ``state``
+        condition: on its match goal, by the identity the substate's ``^superstate``
+        gave it (measured in soar_sml: ``(state <s1> ^top-state <t1>) (<t1> ^block
+        <b1>)`` for one state reached both ways), or by any when none came that way."""
+        if ident is not self.goal or self.goal is None:
+            return False
+        root = self.ex.ids.find(("state", self.goal))
+        if root not in self.names:
+            return True
+        return test == Var(self.names[root]) or (
+            isinstance(test, Conjunction) and Var(self.names[root]) in test.tests)
+
     def var(self, step: Step, name: str, lhs: bool = True) -> Test:
         """The variable (or literal) of a rule variable of a step in the chunk."""
         key = self.ex.key(step, name)
@@ -72,7 +85,7 @@ class Variablizer:
             if value is None:  # local to a negation (each its own)
                 return Var(self.name(("unbound", root, self.scope), name))
             return Const(value)  # type: ignore[arg-type]
-        return Var(self.name(root, "s" if isinstance(key[0], str) else name))  # type: ignore[index]
+        return Var(self.name(root, "s" if isinstance(root[0], str) else name))  # type: ignore[index]
 
     def test(self, test: Test, step: Step, lhs: bool = True) -> Test:
         if isinstance(test, Var):
@@ -156,10 +169,10 @@ def _ground_conditions(vz: Variablizer, ground: Ground, conditions: list[Conditi
                        where: dict[Hashable, tuple[int, str]]) -> None:
     """The conditions of one ground: those whose equality tests came out the same are
     merged (their other tests together), the others stay apart."""
-    is_state = ground.wme.id is vz.goal
     merged: dict[tuple, int] = {}
     for cond, step in ground.tests:
         fields = [vz.test(getattr(cond, field), step) for field in FIELDS]
+        is_state = vz.is_goal(ground.wme.id, fields[0])
         if _equality(fields[2]) is None:
             # the kernel gives a value test without an equality test a variable (measured:
             # ``^max-look-ahead-depth { <m1> < 5 }``)
@@ -266,7 +279,7 @@ def _negation(vz: Variablizer, element: Condition | ConjunctiveNegation,
         return ConjunctiveNegation(tuple(_negation(vz, inner, step)  # type: ignore[misc]
                                          for inner in element.conditions))
     tests = [vz.test(getattr(element, field), step, lhs=False) for field in FIELDS]
-    is_state = step.bindings.get(equality_var(element.id_test) or "") is vz.goal
+    is_state = vz.is_goal(step.bindings.get(equality_var(element.id_test) or ""), tests[0])
     return Condition(tests[0], tests[1], tests[2], element.negated, element.acceptable,
                      "state" if is_state else None)
 
