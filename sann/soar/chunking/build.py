@@ -12,12 +12,13 @@ action fails, and a justification stands in).
 
 from __future__ import annotations
 
+import re
 import warnings
 from collections.abc import Hashable
 
 from ..errors import SoarSemanticError, SoarWarning
 from ..memory import Identifier
-from ..printer import format_production
+from ..printer import format_condition, format_production
 from ..production import (
     Condition,
     ConditionElement,
@@ -46,6 +47,9 @@ class Variablizer:
         self.counts: dict[str, int] = {}
         self.bound: set[Hashable] = set()
         self.goal: Identifier | None = None
+        self.goal_ids: set[object] = set()
+        #: the names of variables local to a negation
+        self.locals: set[str] = set()
         #: the negation being variablized: its local variables are its own
         self.scope = 0
 
@@ -58,18 +62,25 @@ class Variablizer:
             found = self.names[root] = f"{letter}{count}"
         return found
 
+    def find_goal_ids(self, grounds: list[Ground]) -> None:
+        """The chunk's ``state`` variables: its match goal as a rule tested it with
+        ``state`` or as the substate's ``^superstate`` gave it (measured in soar_sml:
+        ``(state <s1> ^top-state <t1>) (<t1> ^block <b1>)`` for one state reached both
+        ways); any variable of the match goal when neither."""
+        root = self.ex.ids.find(("state", self.goal))
+        for ground in grounds:
+            if ground.wme.id is not self.goal:
+                continue
+            for cond, step in ground.tests:
+                var = equality_var(cond.id_test)
+                if var is not None and (cond.goal == "state" or self.ex.ids.find(
+                        self.ex.key(step, var)) == root):
+                    self.goal_ids.add(self.test(cond.id_test, step))
+
     def is_goal(self, ident: object, test: Test) -> bool:
-        """Whether a condition on ``ident`` tested as ``test`` is the chunk's ``state``
-        condition: on its match goal, by the identity the substate's ``^superstate``
-        gave it (measured in soar_sml: ``(state <s1> ^top-state <t1>) (<t1> ^block
-        <b1>)`` for one state reached both ways), or by any when none came that way."""
         if ident is not self.goal or self.goal is None:
             return False
-        root = self.ex.ids.find(("state", self.goal))
-        if root not in self.names:
-            return True
-        return test == Var(self.names[root]) or (
-            isinstance(test, Conjunction) and Var(self.names[root]) in test.tests)
+        return not self.goal_ids or _equality(test) in self.goal_ids
 
     def var(self, step: Step, name: str, lhs: bool = True) -> Test:
         """The variable (or literal) of a rule variable of a step in the chunk."""
@@ -83,7 +94,9 @@ class Variablizer:
             if isinstance(value, Identifier):  # a new identifier of the chunk
                 return Var(self.name(("new", value), name))
             if value is None:  # local to a negation (each its own)
-                return Var(self.name(("unbound", root, self.scope), name))
+                local = self.name(("unbound", root, self.scope), name)
+                self.locals.add(local)
+                return Var(local)
             return Const(value)  # type: ignore[arg-type]
         return Var(self.name(root, "s" if isinstance(root[0], str) else name))  # type: ignore[index]
 
@@ -114,14 +127,22 @@ def build_chunk(ex: Explanation, name: str) -> Production:
                 var = equality_var(getattr(cond, field))
                 if var is not None:
                     vz.bound.add(ex.ids.find(ex.key(step, var)))
+    vz.find_goal_ids(grounds)
     conditions: list[ConditionElement] = []
     where: dict[Hashable, tuple[int, str]] = {}
     for ground in grounds:
         _ground_conditions(vz, ground, conditions, where)
     _add_constraints(vz, ex, conditions, where)
+    seen: set[str] = set()
     for scope, (element, step) in enumerate(ex.negations, 1):
         vz.scope = scope
-        conditions.append(_negation(vz, element, step))
+        negation = _negation(vz, element, step)
+        # the same negation from several firings is tested once
+        key = re.sub(r"<([^>]+)>", lambda m: "<_>" if m.group(1) in vz.locals else m.group(0),
+                     format_condition(negation))
+        if key not in seen:
+            seen.add(key)
+            conditions.append(negation)
     conditions.sort(key=lambda c: 0 if isinstance(c, Condition) and c.goal else 1)
     actions = [_action(vz, action, step) for _, action, step in ex.results]
     production = Production(name, tuple(conditions), tuple(actions), flags=("chunk",))
