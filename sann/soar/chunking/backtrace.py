@@ -233,10 +233,28 @@ def _stand_in(step: Step, cond: Condition, proposal: WME, k: int) -> Condition:
 
 
 def _add_ground(ex: Explanation, wme: WME, cond: Condition, step: Step) -> None:
+    cond = _with_equalities(cond, step, wme)
     ground = ex.grounds.get(wme.timetag)
     if ground is None:
         ground = ex.grounds[wme.timetag] = Ground(wme)
     ground.tests.append((cond, step))
+
+
+def _with_equalities(cond: Condition, step: Step, wme: WME) -> Condition:
+    """The condition with a variable in each field that has no equality test, as the
+    kernel's parser gives it one (``^cook-time > <k>`` is ``^cook-time { <c*1> > <k> }``):
+    so its identity joins those of other conditions on the WME."""
+    tests = {}
+    for slot, value in zip(FIELDS, (wme.id, wme.attr, wme.value), strict=True):
+        test = getattr(cond, slot)
+        if equality_var(test) is None and not isinstance(test, Const):
+            name = f"eq*{id(cond)}*{slot}"
+            step.bindings[name] = value
+            parts = test.tests if isinstance(test, Conjunction) else (test,)
+            test = Conjunction((Var(name), *parts))
+        tests[slot] = test
+    return Condition(tests["id_test"], tests["attr_test"], tests["value_test"], cond.negated,
+                     cond.acceptable, cond.goal)
 
 
 def _bound_id(cond: Condition, step: Step) -> Symbol | None:

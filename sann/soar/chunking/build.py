@@ -171,19 +171,18 @@ def _match_goal(grounds: list[Ground]) -> Identifier | None:
 
 def _join(ex: Explanation, ground: Ground) -> None:
     """Conditions of several firings on one WME: their identifier and value identities
-    become one, unless one is a literal; attribute identities stay apart (measured in
-    soar_sml: the selection space's ``(<ts> ^<state-att> <id>)`` on ``(S1 ^jug J1)``, once
-    per copied augmentation of J1, stays ``^<a1> <j1> ^<a3> <j1>`` beside ``^jug { <j1>
-    <=> <s1> }``, whose attribute was literalized)."""
+    become one (a literal one makes the other literal: measured in soar_sml, ``^cook-time
+    { <c> > 1 }`` and a literalized ``^cook-time 2`` of one WME give ``^cook-time 2``);
+    attribute identities stay apart (measured: the selection space's ``(<ts> ^<state-att>
+    <id>)`` on ``(S1 ^jug J1)``, once per copied augmentation of J1, stays ``^<a1> <j1>
+    ^<a3> <j1>`` beside ``^jug { <j1> <=> <s1> }``, whose attribute was literalized)."""
     first, step0 = ground.tests[0]
     for cond, step in ground.tests[1:]:
         for field in ("id_test", "value_test"):
             a, b = equality_var(getattr(first, field)), equality_var(getattr(cond, field))
             if a is None or b is None:
                 continue
-            ka, kb = ex.key(step0, a), ex.key(step, b)
-            if not ex.ids.is_literal(ka) and not ex.ids.is_literal(kb):
-                ex.ids.union(ka, kb)
+            ex.ids.union(ex.key(step0, a), ex.key(step, b))
 
 
 def _ground_conditions(vz: Variablizer, ground: Ground, conditions: list[ConditionElement],
