@@ -264,12 +264,15 @@ def _bound_id(cond: Condition, step: Step) -> Symbol | None:
 
 
 def _ncc_ids(ncc: ConjunctiveNegation, step: Step) -> list[Symbol | None]:
+    """The identifiers bound outside that a conjunctive negation tests, nested ones too."""
     ids: list[Symbol | None] = []
     for cond in ncc.conditions:
-        if isinstance(cond, Condition):
-            ident = _bound_id(cond, step)
-            if ident is not None:
-                ids.append(ident)
+        if isinstance(cond, ConjunctiveNegation):
+            ids.extend(i for i in _ncc_ids(cond, step) if i is not None)
+            continue
+        ident = _bound_id(cond, step)
+        if ident is not None:
+            ids.append(ident)
     return ids or [None]
 
 
