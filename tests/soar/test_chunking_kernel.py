@@ -26,10 +26,13 @@ from sann.soar.rhs import FUNCTIONS
 from sann.soar.syntax import parse_production
 
 ROOT = Path(__file__).resolve().parents[2]
+#: the classic programs whose chunks agree with the kernel's (the others: see the report
+#: in tests/soar/known_differences)
+CLASSIC = ("arithmetic", "count-test", "water-jug-lookahead", "eight-puzzle-lookahead",
+           "blocks-world-operator-subgoaling", "hierarchical-task", "graph-search",
+           "problem-builder")
 AGENTS = sorted((Path(__file__).parent / "chunking" / "agents").glob("*.soar")) + [
-    ROOT / "rules" / "classic" / "arithmetic.soar",
-    ROOT / "rules" / "classic" / "count-test.soar",
-]
+    ROOT / "rules" / "classic" / f"{name}.soar" for name in CLASSIC]
 BEFORE = ("indifferent-selection --first", "srand 1", "chunk always")
 DECISIONS = 2000
 
@@ -140,3 +143,10 @@ def test_agents_learn_and_use_their_chunks(runs: tuple[list[Run], list[Run]]) ->
     first, second = ours
     assert first.chunks
     assert second.substates < first.substates
+
+
+def test_water_jug_second_run_has_no_impasse() -> None:
+    """The tutorial's point: after one look-ahead run, the chunks choose every operator."""
+    first, second = our_runs(ROOT / "rules" / "classic" / "water-jug-lookahead.soar")
+    assert first.substates > 0 and second.substates == 0
+    assert second.decisions < first.decisions
