@@ -5,20 +5,19 @@ tested the same WME are merged, their identities unified), their tests as the ru
 them with each variable replaced by its identity's variable, or by the symbol when the
 identity was literalized; the kept negations; the constraints of local conditions on the
 identities they constrain. The actions are the results' actions, variablized the same way;
-a local identifier a result links to becomes a new identifier of the chunk. The text is
-then parsed like any rule, so a chunk is checked as a rule is (an unconnected condition or
-action fails, and a justification stands in).
+a local identifier a result links to becomes a new identifier of the chunk. The chunk is
+then checked as a parsed rule is (`syntax._check_production`, `rete.load_warnings`): an
+unconnected condition or action refuses it, and a justification stands in.
 """
 
 from __future__ import annotations
 
 import re
-import warnings
 from collections.abc import Hashable
 
-from ..errors import SoarSemanticError, SoarWarning
+from ..errors import SoarSemanticError
 from ..memory import Identifier
-from ..printer import format_condition, format_production
+from ..printer import format_condition
 from ..production import (
     Condition,
     ConditionElement,
@@ -33,8 +32,9 @@ from ..production import (
     Test,
     Var,
 )
+from ..rete import load_warnings
 from ..rhs import FUNCTIONS
-from ..syntax import parse_production
+from ..syntax import _check_production
 from .backtrace import FIELDS, Explanation, Ground, Step, equality_var
 
 
@@ -146,14 +146,11 @@ def build_chunk(ex: Explanation, name: str) -> Production:
     conditions.sort(key=lambda c: 0 if isinstance(c, Condition) and c.goal else 1)
     actions = [_action(vz, action, step) for _, action, step in ex.results]
     production = Production(name, tuple(conditions), tuple(actions), flags=("chunk",))
-    with warnings.catch_warnings():
-        # the parser's warnings (an unconnected condition) refuse a chunk
-        warnings.simplefilter("error", SoarWarning)
-        try:
-            return parse_production(format_production(production), f"<chunk {name}>",
-                                    FUNCTIONS.keys())
-        except SoarWarning as warning:
-            raise SoarSemanticError(name, str(warning)) from None
+    production = _check_production(production, FUNCTIONS.keys())
+    problems = load_warnings(production)
+    if problems:  # a warning for a rule: a chunk is refused (a justification stands in)
+        raise SoarSemanticError(name, problems[0])
+    return production
 
 
 def _match_goal(grounds: list[Ground]) -> Identifier | None:
