@@ -467,6 +467,10 @@ class Agent:
     def decision_count(self) -> int:
         return self._decisions
 
+    def mark_learning(self, function: str, state: Identifier) -> None:
+        """``force-learn`` / ``dont-learn`` on a state (see `Chunker.allowed`)."""
+        self.chunker.mark(function, state)
+
     def gensym(self, prefix: str) -> str:
         existing = {w.value for w in self._wm.values() if isinstance(w.value, str)}
         while True:

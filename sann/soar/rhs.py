@@ -59,6 +59,7 @@ class RhsContext(Protocol):
     def request_interrupt(self) -> None: ...
     def decision_count(self) -> int: ...
     def gensym(self, prefix: str) -> str: ...
+    def mark_learning(self, function: str, state: Identifier) -> None: ...
     def wmes(self) -> Iterable[WME]: ...
 
 
@@ -963,8 +964,8 @@ def _heading_range(value: int | float) -> int | float:
 
 
 def _learning(name: str) -> RhsFunction:
-    """``dont-learn``/``force-learn``: the kernel checks the state and, learning off as it
-    always is here, does nothing else (measured: no output)."""
+    """``dont-learn``/``force-learn``: the kernel checks the state and marks it for
+    ``chunk except`` / ``chunk only`` (measured: no output)."""
 
     def call(ctx: RhsContext, args: Sequence[Symbol]) -> None:
         state = _one(name, args)
@@ -974,6 +975,7 @@ def _learning(name: str) -> RhsFunction:
             )
         if not state.is_state:
             raise FreshLineError(f"identifier passed to {name} is not a state: {state}.")
+        ctx.mark_learning(name, state)
         return None
 
     return call

@@ -98,6 +98,12 @@ class Chunker:
         self.selection[wme] = [pref.inst for ptype in types
                                for pref in slot.of_type(ptype) if pref.inst is not None]
 
+    def mark(self, function: str, state: object) -> None:
+        """``(force-learn <s>)`` lets ``chunk only`` learn from results of ``<s>``;
+        ``(dont-learn <s>)`` keeps ``chunk except`` from it (measured in soar_sml: both
+        count when called before the result; ``chunk always`` ignores them)."""
+        (self.forced if function == "force-learn" else self.refused).add(state)
+
     def allowed(self, agent: Agent, goal: Goal) -> bool:
         mode = agent.learning
         if mode == "always":
