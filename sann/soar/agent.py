@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import TextIO
 
 from . import commands
+from .chunking import Chunker
 from .decision.agent_state import AgentState
 from .decision.cycle import run_phase
 from .decision.firing_order import creation_key
@@ -81,9 +82,8 @@ class Agent(AgentState):
         self._pushd: list[Path] = []  # directories pushd put on top of the sourcing file's
         self._aliases: dict[str, tuple[str, ...]] = {}  # alias -> the command words
         self.max_gp = 20000  # most productions one gp may make (the kernel's default)
-        #: when the kernel would learn chunks (``chunk always|never|only|except``): this
-        #: engine does not learn, so it runs only with ``never``
         self.learning = "never"
+        self.chunker = Chunker()
         self._gensym_counter = 0
         self._make_top_state()
 
@@ -301,11 +301,6 @@ class Agent(AgentState):
         """Run until halt or interrupt, or until ``decisions`` more decisions were made."""
         if decisions is not None and decisions < 0:
             raise SoarRuntimeError(f"run: decision count must be >= 0, got {decisions}")
-        if self.learning != "never":
-            raise SoarRuntimeError(
-                f"run: learning is on ('chunk {self.learning}'), and this engine does not "
-                "learn chunks: turn it off with 'chunk never' (or 'learn --off') first"
-            )
         self._stop = False
         self._halt_note = ""
         target = None if decisions is None else self._decisions + self._owed(decisions)
@@ -393,6 +388,10 @@ class Agent(AgentState):
 
     def decision_count(self) -> int:
         return self._decisions
+
+    def mark_learning(self, function: str, state: Identifier) -> None:
+        """``force-learn`` / ``dont-learn`` on a state (see `Chunker.mark`)."""
+        self.chunker.mark(function, state)
 
     def gensym(self, prefix: str) -> str:
         existing = {w.value for w in self._wm.values() if isinstance(w.value, str)}

@@ -252,8 +252,8 @@ _CHUNK_BAD_VALUE = (
 def _chunk(agent: Agent, args: tuple[str, ...], base: Path) -> None:
     """``chunk``, as the 9.6 kernel reads it (measured): options (``-x``) are ignored, the
     first word is a mode, a setting with an optional value, or a query; words after the
-    mode are ignored. The mode is recorded (`Agent.learning`); running with any mode but
-    ``never`` is refused, as this engine does not learn."""
+    mode are ignored. The mode is recorded (`Agent.learning`, see `sann.soar.chunking`);
+    ``chunk stats`` prints the counters."""
     words = [word for word in args if not word.startswith("-")]
     if not words:
         return
@@ -263,6 +263,10 @@ def _chunk(agent: Agent, args: tuple[str, ...], base: Path) -> None:
     elif first in _CHUNK_SETTINGS:
         if rest and not _valid_chunk_value(_CHUNK_SETTINGS[first], rest[0]):
             raise SoarRuntimeError(_CHUNK_BAD_VALUE)
+    elif first == "stats":
+        from .chunking.explain import stats_text
+
+        agent._emit(stats_text(agent))
     elif first not in _CHUNK_QUERIES:
         raise SoarRuntimeError(_CHUNK_INVALID)
 
@@ -325,16 +329,16 @@ def _output(agent: Agent, args: tuple[str, ...], base: Path) -> None:
 
 _EXCISE_GROUPS = {
     "--all": "all", "-a": "all", "--user": "user", "-u": "user", "--default": "default",
-    "-d": "default", "--chunks": "none", "-c": "none", "--rl": "none", "-r": "none",
+    "-d": "default", "--chunks": "chunk", "-c": "chunk", "--rl": "none", "-r": "none",
     "--templates": "none", "-t": "none",
 }  # fmt: skip
 
 
 def _excise(agent: Agent, args: tuple[str, ...], base: Path) -> None:
     """``excise name...`` or a group: ``--all``, ``--user`` (all but ``:default`` rules),
-    ``--default``; ``--chunks``, ``--rl`` and ``--templates`` excise nothing here (this
-    engine makes no chunks and has no RL or template rules) and succeed, as in the kernel
-    when there are none."""
+    ``--default``, ``--chunks`` (learned rules, which ``--user`` leaves); ``--rl`` and
+    ``--templates`` excise nothing here (this engine has no RL or template rules) and
+    succeed, as in the kernel when there are none."""
     for name in args:
         group = _EXCISE_GROUPS.get(name)
         if group is None and name.startswith("-"):
@@ -345,8 +349,21 @@ def _excise(agent: Agent, args: tuple[str, ...], base: Path) -> None:
             agent.excise_all()
         elif group != "none":
             for rule, info in list(agent._productions.items()):
-                if ("default" in info.production.flags) == (group == "default"):
+                flags = info.production.flags
+                kind = "default" if "default" in flags else "chunk" if "chunk" in flags else "user"
+                if kind == group:
                     agent.excise(rule)
+
+
+def _explain(agent: Agent, args: tuple[str, ...], base: Path) -> None:
+    """``explain [chunk] <name>``: the rule firings a chunk was learned from."""
+    from .chunking.explain import explain_text
+
+    try:
+        agent._emit(explain_text(agent, args))
+    except KeyError as missing:
+        raise SoarRuntimeError(f"explain: no chunk named {missing.args[0]} was "
+                               "learned") from None
 
 
 def _init_soar(agent: Agent, args: tuple[str, ...], base: Path) -> None:
@@ -545,9 +562,16 @@ def _print(agent: Agent, args: tuple[str, ...], base: Path) -> None:
     from .printer import format_production
 
     items, depth, names = list(args), 1, []
+    chunks = full = False
     while items:
         item = items.pop(0)
-        if item in ("-d", "--depth"):
+        if item in ("-c", "--chunks"):
+            chunks = True
+        elif item in ("-f", "--full"):
+            full = True
+        elif item in ("-j", "--justifications"):
+            return  # justifications are not rules here: the kernel lists none either
+        elif item in ("-d", "--depth"):
             if not items:
                 raise SoarRuntimeError(f"{item} needs a number")
             depth = _int(items.pop(0))
@@ -557,7 +581,14 @@ def _print(agent: Agent, args: tuple[str, ...], base: Path) -> None:
             raise SoarRuntimeError(f"unsupported option {item}")
         else:
             names.append(item)
-    if not names:
+    if chunks:
+        learned = [name for name, info in agent._productions.items()
+                   if "chunk" in info.production.flags]
+        names = learned[::-1] if full else []
+        if not full:
+            agent._emit("".join(f"{name} \n" for name in reversed(learned)))
+            return
+    elif not names:
         agent._emit("".join(f"{name} \n" for name in reversed(agent.productions)))
     for name in names:
         info = agent._productions.get(name)
@@ -700,6 +731,7 @@ HANDLERS: dict[str, Handler] = {
     "echo": _echo,
     "output": _output,
     "excise": _excise,
+    "explain": _explain,
     "init-soar": _init_soar,
     "init": _init_soar,
     "alias": _alias,

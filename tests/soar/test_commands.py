@@ -57,12 +57,32 @@ def test_srand_makes_random_choices_reproducible() -> None:
     assert runs[0] == runs[1]
 
 
+_LEARNS = (
+    "sp {go (state <s> ^superstate nil -^done) --> (<s> ^operator <o> +) (<o> ^name go)}\n"
+    "sp {done (state <s> ^operator <o>) (<o> ^name go ^answer <a>) --> (<s> ^done <a>)}\n"
+    "sp {init (state <s> ^superstate nil) --> (<s> ^x 3)}\n"
+    "sp {sub (state <s> ^impasse no-change ^superstate <ss>) (<ss> ^x <x> ^operator <o>)"
+    " --> (<o> ^answer <x>)}\n"
+)
+
+
 @pytest.mark.parametrize("text", ["learn --on", "chunk always", "learn -e"])
-def test_learning_on_loads_and_running_with_it_is_refused(text: str) -> None:
-    agent, _ = agent_with(text)  # as the kernel, the setting is accepted and recorded
+def test_learning_on_learns_a_chunk(text: str) -> None:
+    agent, out = agent_with(text + "\n" + _LEARNS)
     assert agent.learning == "always"
-    with pytest.raises(SoarRuntimeError, match="learning is on"):
-        agent.run(1)
+    agent.run(3)
+    chunks = [name for name, info in agent._productions.items()
+              if "chunk" in info.production.flags]
+    assert chunks == ["chunk*sub*t2-1"]  # the kernel's name for it (soar_sml 9.6)
+    out.seek(0)
+    out.truncate()
+    agent.load("print --chunks\nexplain chunk*sub*t2-1")
+    assert out.getvalue().startswith("chunk*sub*t2-1 \n")
+    assert "1: sub\n" in out.getvalue()
+    agent.load("init-soar")
+    assert "chunk*sub*t2-1" in agent._productions  # init-soar keeps chunks
+    agent.load("excise --chunks")
+    assert "chunk*sub*t2-1" not in agent._productions and "sub" in agent._productions
 
 
 @pytest.mark.parametrize("text", ["excise-everything now", "rl --set learning on", "gp {}"])
@@ -256,3 +276,27 @@ def test_gp_syntax_error_points_into_the_file() -> None:
     with pytest.raises(SoarError) as info:
         agent_with("\n\ngp {bad (state <s> ^foo [a b] --> (<s> ^bar 1)}")
     assert ":3:" in str(info.value) and "bad*1" in str(info.value)
+
+
+_FLAGGED = (
+    "sp {go (state <s> ^superstate nil -^done) --> (<s> ^operator <o> +) (<o> ^name go)}\n"
+    "sp {done (state <s> ^operator <o>) (<o> ^name go ^answer <a>) --> (<s> ^done <a>)}\n"
+    "sp {init (state <s> ^superstate nil) --> (<s> ^x 3)}\n"
+    "sp {mark (state <s> ^impasse no-change) --> (FLAG <s>) (<s> ^ready yes)}\n"
+    "sp {sub (state <s> ^impasse no-change ^ready yes ^superstate <ss>)"
+    " (<ss> ^x <x> ^operator <o>) --> (<o> ^answer <x>)}\n"
+)
+
+
+@pytest.mark.parametrize(("mode", "flag", "learns"), [
+    ("only", "force-learn", True), ("only", "dont-learn", False),
+    ("except", "dont-learn", False), ("except", "force-learn", True),
+    ("always", "dont-learn", True),
+])  # each as soar_sml 9.6 does
+def test_chunk_only_and_except_follow_force_and_dont_learn(mode: str, flag: str,
+                                                          learns: bool) -> None:
+    agent, _ = agent_with(f"chunk {mode}\n" + _FLAGGED.replace("FLAG", flag))
+    agent.run(3)
+    learned = [name for name, info in agent._productions.items()
+               if "chunk" in info.production.flags]
+    assert learned == (["chunk*sub*t2-1"] if learns else [])

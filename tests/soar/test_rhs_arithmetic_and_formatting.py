@@ -32,6 +32,9 @@ class Ctx:
         self.counter += 1
         return f"{prefix}{self.counter}"
 
+    def mark_learning(self, function: str, state: object) -> None:
+        self.marked = (function, state)
+
 
 def call(name: str, *args):
     return FUNCTIONS[name](Ctx(), list(args))

@@ -17,7 +17,7 @@ from __future__ import annotations
 import sys
 import weakref
 from collections.abc import Iterable
-from typing import TextIO
+from typing import Any, Protocol, TextIO
 
 from ..errors import SoarError
 from ..goals import Goal
@@ -63,8 +63,25 @@ class JoinLink:
         self.seen = seen
 
 
+class Learner(Protocol):
+    """What the decision cycle asks of chunking (`sann.soar.chunking.Chunker`), through
+    the agent: the learner builds on the decision modules, so they do not import it."""
+
+    def selected(self, agent: Any, wme: WME, slot: Slot) -> None: ...
+    def explain(self, agent: Any, inst: Instantiation,
+                results: list[Preference]) -> object | None: ...
+    def justify(self, agent: Any, made_by: Instantiation, results: list[Preference],
+                grounds: tuple[WME, ...], home: Goal, fired: Instantiation,
+                ex: Any) -> tuple[Instantiation, bool]: ...
+    def mark(self, function: str, state: object) -> None: ...
+
+
 class AgentState:
     """The decision cycle's data (see the module docstring)."""
+
+    #: when to learn chunks (``chunk always|never|only|except``), and the learner
+    learning: str
+    chunker: Learner
 
     # declared here: assigned first outside ``__init__`` (mypyc takes the first type)
     _input_handle: InputHandle | None

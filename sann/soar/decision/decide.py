@@ -77,6 +77,8 @@ def _select(agent: AgentState, goal: Goal, value: Symbol) -> None:
     wme = slot.wmes[vkey(value)] = add_wme(agent, goal.id, "operator", value)
     if goal.level > 1:
         remember_source(agent, wme, slot, (REQUIRE, ACCEPTABLE))
+        if agent.learning != "never":
+            agent.chunker.selected(agent, wme, slot)
     name = _operator_name(agent, value)
     agent._operator_names.append(name if name is not None else "?")
     collect_changes(agent)  # before the WME trace: it may warn (measured)

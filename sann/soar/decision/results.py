@@ -188,13 +188,16 @@ def _justify(agent: AgentState, inst: Instantiation, results: list[Preference]) 
         inst, inst.goal.level, through_o_support=True, visited=visited,
         also=[pref.inst for pref in results if pref.inst is not inst],
     ))
+    # explained before the results' identifiers are promoted (they are local to it)
+    explained = (agent.chunker.explain(agent, inst, results) if agent.learning != "never"
+                 else None)
     _promote(agent, results)
     if not grounds:
         _ignore_unconditional_justification(agent, inst)
         return
     home = inst.goal.superstate
     assert home is not None  # results come from substates
-    just = _make_justification(agent, inst, results, grounds, home, inst)
+    just, learned = _justify_or_learn(agent, inst, results, grounds, home, inst, explained)
     if _watch_negations(agent, just, visited, inst.goal.level):
         _justification_matches(agent, inst.goal, min(agent._level_of(p.id) for p in results))
     while home.superstate is not None:
@@ -210,18 +213,33 @@ def _justify(agent: AgentState, inst: Instantiation, results: list[Preference]) 
         # the negated conditions of every rule behind it (the first is the previous
         # justification itself)
         visited += more[1:]
+        # a chunk's instantiation with results higher up is explained in turn (the
+        # kernel's chunkx2*...)
+        explained = agent.chunker.explain(agent, just, higher) if learned else None
         source, home = home, home.superstate
-        just = _make_justification(agent, just, higher, grounds, home, inst)
+        just, learned = _justify_or_learn(agent, just, higher, grounds, home, inst, explained)
         _watch_negations(agent, just, visited, source.level)
 
 
+def _justify_or_learn(agent: AgentState, made_by: Instantiation, results: list[Preference],
+                      grounds: tuple[WME, ...], home: Goal, fired: Instantiation,
+                      explained: object | None) -> tuple[Instantiation, bool]:
+    """The justification at ``home`` for ``made_by``'s results, or, when chunking
+    ``explained`` them, the one the learner makes (a chunk's instantiation when it learns
+    one); whether a chunk was learned."""
+    if explained is None:
+        return _make_justification(agent, made_by, results, grounds, home, fired), False
+    return agent.chunker.justify(agent, made_by, results, grounds, home, fired, explained)
+
+
 def _make_justification(agent: AgentState, inst: Instantiation, results: list[Preference],
-                        grounds: tuple[WME, ...], home: Goal,
-                        fired: Instantiation) -> Instantiation:
+                        grounds: tuple[WME, ...], home: Goal, fired: Instantiation,
+                        chunk: str | None = None) -> Instantiation:
     """A justification at ``home`` for ``inst``'s results; its support is computed like
     a rule's: o-support when its conditions include the selected operator of its goal.
     ``fired``: the rule instantiation whose firing made it (its preferences are
-    asserted next to that one's, see ``_with_justifications``)."""
+    asserted next to that one's, see ``_with_justifications``); ``chunk``: the name
+    of the chunk learned from it, which its instantiation is (see `Chunker`)."""
     agent._justifications += 1
     match_goal_id = _goal_of_grounds(agent, grounds).id
     operators = [
@@ -232,7 +250,8 @@ def _make_justification(agent: AgentState, inst: Instantiation, results: list[Pr
     just = Instantiation(
         # the kernel spends two numbers on each justification (measured: justify1,
         # justify3, justify5, ...)
-        f"justify{2 * agent._justifications - 1}", None, home, grounds, bool(operators), True
+        chunk or f"justify{2 * agent._justifications - 1}", None, home, grounds,
+        bool(operators), True
     )
     just.grounds = grounds
     just.source = inst.goal
@@ -241,7 +260,7 @@ def _make_justification(agent: AgentState, inst: Instantiation, results: list[Pr
         operators = []  # a proposal is i-supported, as a rule's (see is_o_supported)
     on_operator = [any(pref.id is op for op in operators) for pref in results]
     mixed = bool(operators) and any(on_operator) and not all(on_operator)
-    if mixed:
+    if mixed and chunk is None:  # a chunk's own instantiation is not warned of (measured)
         agent._warn_mixed_support(just.name, justification=True)
     for pref, elaborates in zip(results, on_operator, strict=True):
         copy = Preference(pref.type, pref.id, pref.attr, pref.value, pref.referent, just)

@@ -11,7 +11,7 @@ from collections.abc import Callable, Iterable, Sequence
 from typing import Protocol
 
 from sann.soar.errors import SoarRuntimeError
-from sann.soar.memory import WME, Symbol
+from sann.soar.memory import WME, Identifier, Symbol
 from sann.soar.text import format_symbol
 
 
@@ -33,6 +33,7 @@ class RhsContext(Protocol):
     def request_interrupt(self) -> None: ...
     def decision_count(self) -> int: ...
     def gensym(self, prefix: str) -> str: ...
+    def mark_learning(self, function: str, state: Identifier) -> None: ...
     def wmes(self) -> Iterable[WME]: ...
 
 

@@ -1,6 +1,6 @@
 """Functions about the run rather than its data: ``halt`` and ``interrupt`` (they ask the agent
 to stop), ``wait``, ``dc`` and ``timestamp`` (its clocks), and ``count``, ``dont-learn`` and
-``force-learn``, which the kernel checks and otherwise ignores here.
+``force-learn``, which mark a state for ``chunk except`` / ``chunk only``.
 """
 
 from __future__ import annotations
@@ -48,8 +48,8 @@ def _count(ctx: RhsContext, args: Sequence[Symbol]) -> None:
 
 
 def _learning(name: str) -> RhsFunction:
-    """``dont-learn``/``force-learn``: the kernel checks the state and, learning off as it
-    always is here, does nothing else (measured: no output)."""
+    """``dont-learn``/``force-learn``: the kernel checks the state and marks it for
+    ``chunk except`` / ``chunk only`` (measured: no output)."""
 
     def call(ctx: RhsContext, args: Sequence[Symbol]) -> None:
         state = one(name, args)
@@ -59,6 +59,7 @@ def _learning(name: str) -> RhsFunction:
             )
         if not state.is_state:
             raise FreshLineError(f"identifier passed to {name} is not a state: {state}.")
+        ctx.mark_learning(name, state)
         return None
 
     return call
