@@ -10,7 +10,9 @@ virtual environment (``VENV=``, its install stamp taken as up to date: nothing i
 and imports its own sources (``PYTHONPATH``). Three builds, in order:
 
 1. fresh: no execution cache, no dataset cache, no compiled engine (``--copy-engine`` copies
-   this checkout's compiled engine when it was built from the same sources, to skip gcc);
+   this checkout's compiled engine when it was built from the same sources, to skip gcc).
+   ``make engine`` runs first and is timed apart, then ``make book``: the fresh build is the
+   sum;
 2. prose edit: one sentence added to a paragraph of ``book/networks.md``;
 3. rule edit: one comment line of ``rules/blocks.soar`` changed. The file changed, so every
    chapter that read it executes again; the datasets planned with it are keyed on its code
@@ -19,8 +21,9 @@ and imports its own sources (``PYTHONPATH``). Three builds, in order:
    the fresh build.
 
 It prints each build's wall and CPU seconds (this process's children: on a shared machine the
-wall time also counts other users), its ratio to the fresh build (the anchor, measured in the
-same run), the chapters it executed with their seconds, and the issue's targets.
+wall time also counts other users, so the 1-minute load average is printed before and after
+each build), its ratio to the fresh build (the anchor, measured in the same run), the
+chapters it executed with their seconds, and the issue's targets.
 """
 
 from __future__ import annotations
@@ -46,11 +49,16 @@ def cpu_seconds() -> float:
     return usage.ru_utime + usage.ru_stime
 
 
-def make_book(clone: Path, venv: Path, jobs: int) -> tuple[float, float, dict[str, float]]:
-    """Run ``make book`` in the clone: (wall s, CPU s, {chapter: execution s})."""
+def load() -> str:
+    return f"load {os.getloadavg()[0]:.1f}"
+
+
+def make_book(clone: Path, venv: Path, jobs: int, target: str = "book"
+              ) -> tuple[float, float, dict[str, float]]:
+    """Run ``make <target>`` in the clone: (wall s, CPU s, {chapter: execution s})."""
     env = {k: v for k, v in os.environ.items() if k not in ("JPY_SESSION_NAME", "SANN_CACHE")}
     env.update(PYTHONPATH=str(clone), SANN_BOOK_JOBS=str(jobs))
-    cmd = ["make", f"VENV={venv}", "-o", str(venv / ".installed"), "book"]
+    cmd = ["make", f"VENV={venv}", "-o", str(venv / ".installed"), target]
     wall, cpu = time.perf_counter(), cpu_seconds()
     done = subprocess.run(cmd, cwd=clone, env=env, capture_output=True, text=True)
     wall, cpu = time.perf_counter() - wall, cpu_seconds() - cpu
@@ -106,16 +114,26 @@ def main() -> None:
         if args.copy_engine:
             print("compiled engine copied" if copy_engine(clone)
                   else "compiled engine not copied (other sources): make compiles it")
+        before = load()
+        wall, cpu, _ = make_book(clone, venv, args.jobs, "engine")
+        print(f"{'engine':>10s}: {wall:7.1f} s wall, {cpu:7.1f} s CPU ({before}, "
+              f"then {load()})", flush=True)
+        engine = (wall, cpu)
         results = {}
         for step, edit in (("fresh", None), ("prose edit", prose_edit),
                            ("rule edit", rule_edit)):
             if edit is not None:
                 edit(clone)
+            before = load()
             results[step] = make_book(clone, venv, args.jobs)
             wall, cpu, chapters = results[step]
             ran = ", ".join(f"{c} {s:.0f} s" for c, s in sorted(chapters.items())) or "none"
-            print(f"{step:>10s}: {wall:7.1f} s wall, {cpu:7.1f} s CPU; executed: {ran}",
-                  flush=True)
+            print(f"{step:>10s}: {wall:7.1f} s wall, {cpu:7.1f} s CPU ({before}, then "
+                  f"{load()}); executed: {ran}", flush=True)
+        wall, cpu, chapters = results["fresh"]
+        results["fresh"] = (wall + engine[0], cpu + engine[1], chapters)
+        print(f"{'fresh':>10s}: engine + book {results['fresh'][0]:.1f} s wall, "
+              f"{results['fresh'][1]:.1f} s CPU")
         anchor = results["fresh"][0]
         print(f"\n{'build':>10s} {'wall s':>8s} {'/ fresh':>8s} {'target s':>9s}")
         for step, (wall, _, _) in results.items():
