@@ -41,7 +41,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 TARGETS = {"fresh": 600.0, "prose edit": 60.0, "rule edit": 240.0}
-EXECUTED = re.compile(r"\[bookcache\] executed (\S+) in ([0-9.]+) s")
+EXECUTED = re.compile(r"\[bookcache\] executed (\S+) in ([0-9.]+) s \(([0-9.]+) s CPU\)")
 
 
 def cpu_seconds() -> float:
@@ -54,8 +54,9 @@ def load() -> str:
 
 
 def make_book(clone: Path, venv: Path, jobs: int, target: str = "book"
-              ) -> tuple[float, float, dict[str, float]]:
-    """Run ``make <target>`` in the clone: (wall s, CPU s, {chapter: execution s})."""
+              ) -> tuple[float, float, dict[str, tuple[float, float]]]:
+    """Run ``make <target>`` in the clone: (wall s, CPU s, {chapter: (execution wall s,
+    its kernel's CPU s)})."""
     env = {k: v for k, v in os.environ.items() if k not in ("JPY_SESSION_NAME", "SANN_CACHE")}
     env.update(PYTHONPATH=str(clone), SANN_BOOK_JOBS=str(jobs))
     cmd = ["make", f"VENV={venv}", "-o", str(venv / ".installed"), target]
@@ -64,7 +65,8 @@ def make_book(clone: Path, venv: Path, jobs: int, target: str = "book"
     wall, cpu = time.perf_counter() - wall, cpu_seconds() - cpu
     if done.returncode != 0:
         sys.exit(f"make book failed in {clone}:\n{done.stdout[-4000:]}\n{done.stderr[-4000:]}")
-    chapters = {Path(uri).stem: float(s) for uri, s in EXECUTED.findall(done.stdout + done.stderr)}
+    chapters = {Path(uri).stem: (float(w), float(u))
+                for uri, w, u in EXECUTED.findall(done.stdout + done.stderr)}
     return wall, cpu, chapters
 
 
@@ -127,7 +129,8 @@ def main() -> None:
             before = load()
             results[step] = make_book(clone, venv, args.jobs)
             wall, cpu, chapters = results[step]
-            ran = ", ".join(f"{c} {s:.0f} s" for c, s in sorted(chapters.items())) or "none"
+            ran = ", ".join(f"{c} {w:.0f} s ({u:.0f} s CPU)"
+                            for c, (w, u) in sorted(chapters.items())) or "none"
             print(f"{step:>10s}: {wall:7.1f} s wall, {cpu:7.1f} s CPU ({before}, then "
                   f"{load()}); executed: {ran}", flush=True)
         wall, cpu, chapters = results["fresh"]

@@ -6,6 +6,7 @@ of its inputs): the tests read that log to see which chapters a build executed.
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import subprocess
@@ -116,6 +117,11 @@ def test_each_build_executes_exactly_the_chapters_whose_inputs_changed(book: Pat
     """One book through a series of edits (each build costs a Sphinx start and kernels)."""
     assert built(book) == ["a", "b", "c", "d"]
     assert "sp {a" in html(book, "a")
+    records = list((book / "book/_build/.jupyter_cache" / bookcache.RECORDS).glob("*.json"))
+    assert len(records) == 4
+    for record in records:  # the kernel's CPU seconds: at least its start (imports)
+        data = json.loads(record.read_text())
+        assert 0.05 < data["execution_cpu_seconds"] < 60, data
     executed = nbformat.read(book / "book" / "_build" / "jupyter_execute" / "a.ipynb", 4)
     assert "sp {a" in executed.cells[-1].outputs[0]["text"]
     # nothing changed: nothing is executed
