@@ -12,15 +12,23 @@ At build time it
   ``sann/live.py``, ``sann/exercises.py``) with their data (the grammar, ``sann/rules``) and
   the pure-Python dependencies as installed in this environment (lark, mypy_extensions), so
   the page runs the very code the build ran, offline.
+
+Sphinx keeps the doctrees of unchanged pages, and a page's cell metadata is in its doctree:
+each page with live cells depends on this file (and on the modules its exercises and scenes
+were computed with), so a change to them makes Sphinx read the page again. Every page loads
+the scripts of ``_static/live`` (their URLs carry a checksum), so a change to one of them, or
+to this file, rewrites every page.
 """
 
 from __future__ import annotations
 
+import hashlib
 import html
 import importlib.metadata
 import json
 import shutil
 import subprocess
+import sys
 import zipfile
 from pathlib import Path
 from typing import Any
@@ -30,6 +38,8 @@ from docutils.parsers.rst import Directive, directives
 
 ROOT = Path(__file__).resolve().parents[1]
 STATIC = "live"
+#: The page's scripts and styles (copied by Sphinx from html_static_path).
+ASSETS = Path(__file__).resolve().parent / "_static" / STATIC
 #: The runtime files of the Pyodide npm package the worker loads.
 PYODIDE_FILES = ("pyodide.mjs", "pyodide.asm.mjs", "pyodide.asm.wasm", "python_stdlib.zip",
                  "pyodide-lock.json", "package.json")
@@ -74,6 +84,34 @@ def scene_input(name: str | None) -> tuple[list, str] | None:
 
 
 
+def project_modules() -> list[Path]:
+    """The source files of the project's modules loaded in this process (a compiled module's
+    ``.py`` beside it): what metadata computed by the package (a scene, an exercise) may
+    have used. More than it used, which only costs a page read again for nothing."""
+    found = set()
+    for module in list(sys.modules.values()):
+        file = getattr(module, "__file__", None)
+        if not file:
+            continue
+        path = Path(file).resolve()
+        if not path.is_relative_to(ROOT) or ".venv" in path.relative_to(ROOT).parts:
+            continue
+        source = path if path.suffix == ".py" else path.with_name(path.name.split(".")[0] + ".py")
+        if source.exists():
+            found.add(source)
+    return sorted(found)
+
+
+def assets_digest() -> str:
+    """A digest of what every page loads from this extension: its scripts and styles, and
+    this file (which says which scripts a page loads)."""
+    digest = hashlib.sha256(Path(__file__).resolve().read_bytes())
+    for path in sorted(ASSETS.iterdir()):
+        if path.is_file():
+            digest.update(path.name.encode() + b"\0" + path.read_bytes())
+    return digest.hexdigest()
+
+
 def _meta_node(meta: dict[str, Any]) -> nodes.raw:
     data = html.escape(json.dumps(meta), quote=True)
     return nodes.raw("", f'<div class="sann-live-meta" hidden data-live="{data}"></div>',
@@ -101,12 +139,14 @@ def mark_soar_blocks(app, doctree: nodes.document) -> None:
     """Put a metadata element before every Soar block: the page's script makes it live."""
     index = 0
     agents: dict[str, list[int]] = {}
+    computed = False  # metadata from the package's code: a scene or an exercise
     for block in list(doctree.findall(nodes.literal_block)):
         text = block.astext()
         meta: dict[str, Any] | None = None
         if block.get("sann_exercise"):
             meta = {"kind": "exercise", "exercise": block["sann_exercise"],
                     "preload": block["sann_preload"]}
+            computed = True
         elif text.startswith("%%soar"):
             agent = (text.split(None, 2)[1:2] or ["soar"])[0]
             agent = agent if not agent.startswith("-") else "soar"
@@ -122,11 +162,24 @@ def mark_soar_blocks(app, doctree: nodes.document) -> None:
             scene = scene_input(name)
             if scene is not None:
                 meta["input"], meta["input_note"] = scene
+                computed = True
         if meta is None:
             continue
         meta.update(index=index, shipped=text, page=app.env.docname)
         block.parent.insert(block.parent.index(block), _meta_node(meta))
         index += 1
+    if index:
+        for path in [Path(__file__).resolve(), *(project_modules() if computed else [])]:
+            app.env.note_dependency(str(path))
+
+
+def rewrite_on_new_assets(app, env) -> list[str]:
+    """Every page, when the scripts every page loads changed since the last build."""
+    digest = assets_digest()
+    if getattr(env, "sann_live_assets", None) == digest:
+        return []
+    env.sann_live_assets = digest
+    return sorted(env.found_docs)
 
 
 class LiveExercise(Directive):
@@ -226,5 +279,6 @@ def setup(app) -> dict[str, Any]:
     app.add_css_file(f"{STATIC}/live.css")
     app.add_directive("live-exercise", LiveExercise)
     app.connect("doctree-read", mark_soar_blocks, priority=600)
+    app.connect("env-get-updated", rewrite_on_new_assets)
     app.connect("build-finished", copy_runtime)
     return {"parallel_read_safe": True, "parallel_write_safe": True}

@@ -278,28 +278,42 @@ class Chapter:
 
 @dataclass
 class Outcome:
-    """What executing the chapters did: seconds per executed chapter, tracebacks of the
-    failed ones, and the chapters already in the cache."""
+    """What executing the chapters did: seconds per executed chapter (wall, and the CPU
+    seconds of its kernel and the processes it waited for: on a shared machine the wall time
+    also counts other users), tracebacks of the failed ones, and the chapters already in the
+    cache."""
 
     executed: dict[str, float] = field(default_factory=dict)
+    cpu: dict[str, float] = field(default_factory=dict)
     failed: dict[str, str] = field(default_factory=dict)
     cached: list[str] = field(default_factory=list)
     dropped: dict[str, str] = field(default_factory=dict)
 
 
-async def _hidden(client: Any, code: str) -> None:
-    """Run ``code`` in the kernel outside the notebook (no history, no outputs)."""
-    msg_id = client.kc.execute(code, silent=True, store_history=False)
+#: The kernel's CPU seconds, its own and its waited-for children's (evaluated in the kernel).
+_CPU = ("sum(getattr(__import__('resource').getrusage(who), part) for who in (0, -1) "
+        "for part in ('ru_utime', 'ru_stime'))")
+
+
+async def _hidden(client: Any, code: str, expressions: dict[str, str] | None = None
+                  ) -> dict[str, str]:
+    """Run ``code`` in the kernel outside the notebook (no history, no outputs); the values
+    of ``expressions`` evaluated after it, as text."""
+    msg_id = client.kc.execute(code, silent=True, store_history=False,
+                               user_expressions=expressions or {})
     reply = await client.async_wait_for_reply(msg_id)
     content = (reply or {}).get("content", {})
     if content.get("status") != "ok":
         raise RuntimeError("the input recorder failed in the kernel: "
                            f"{content.get('ename')}: {content.get('evalue')}")
+    values = content.get("user_expressions", {})
+    return {name: values.get(name, {}).get("data", {}).get("text/plain", "")
+            for name in expressions or {}}
 
 
-async def _execute(chapter: Chapter, log: Path) -> None:
+async def _execute(chapter: Chapter, log: Path) -> float:
     """Execute every cell of ``chapter.notebook`` in place (as nbclient's execute does),
-    with the input recorder around the cells."""
+    with the input recorder around the cells; the kernel's CPU seconds."""
     from nbclient import NotebookClient
 
     client = NotebookClient(chapter.notebook, timeout=chapter.timeout,
@@ -316,8 +330,9 @@ async def _execute(chapter: Chapter, log: Path) -> None:
         for index, cell in enumerate(chapter.notebook.cells):
             await client.async_execute_cell(cell, index,
                                             execution_count=client.code_cells_executed + 1)
-        await _hidden(client, finish)
+        cpu = await _hidden(client, finish, {"cpu": _CPU})
         client.set_widgets_metadata()
+    return float(cpu["cpu"])
 
 
 def _inputs(log: Path) -> dict[str, list | None]:
@@ -326,7 +341,8 @@ def _inputs(log: Path) -> dict[str, list | None]:
     return {_relative(Path(n)): file_stamp(Path(n)) for n in names}
 
 
-def _store(cache_path: Path, chapter: Chapter, seconds: float, inputs: dict, env: str) -> None:
+def _store(cache_path: Path, chapter: Chapter, seconds: float, cpu: float, inputs: dict,
+           env: str) -> None:
     """Cache the executed notebook, then record its inputs (in that order: see the module)."""
     from jupyter_cache import get_cache
     from jupyter_cache.base import CacheBundleIn
@@ -337,7 +353,7 @@ def _store(cache_path: Path, chapter: Chapter, seconds: float, inputs: dict, env
         check_validity=False, overwrite=True)
     _write_json(record_path(cache_path, entry.hashkey),
                 {"uri": chapter.uri, "environment": env, "files": inputs,
-                 "execution_seconds": seconds})
+                 "execution_seconds": seconds, "execution_cpu_seconds": cpu})
 
 
 def _traceback(error: BaseException) -> str:
@@ -359,17 +375,18 @@ async def _run_all(chapters: Sequence[Chapter], cache_path: Path, jobs: int, env
                 logger(f"executing {chapter.uri}")
             t0 = time.perf_counter()
             try:
-                await _execute(chapter, log)
+                cpu = await _execute(chapter, log)
             except Exception as error:  # a failing cell, a timeout, a dead kernel
                 outcome.failed[chapter.uri] = _traceback(error)
                 if logger:
                     logger(f"failed: {chapter.uri}")
                 return
             seconds = time.perf_counter() - t0
-            _store(cache_path, chapter, seconds, _inputs(log), env)
+            _store(cache_path, chapter, seconds, cpu, _inputs(log), env)
             outcome.executed[chapter.uri] = seconds
+            outcome.cpu[chapter.uri] = cpu
             if logger:
-                logger(f"executed {chapter.uri} in {seconds:.1f} s")
+                logger(f"executed {chapter.uri} in {seconds:.1f} s ({cpu:.1f} s CPU)")
 
     try:
         await asyncio.gather(*(one(i, c) for i, c in enumerate(chapters)))

@@ -90,64 +90,105 @@ def train_seeds(
     config: TrainConfig = TrainConfig(),
     progress: bool = False,
 ) -> list[TrainResult]:
-    """One net per seed on the same data, all trained at once.
+    """One net per seed on the same data, all trained at once (see `train_groups`)."""
+    return train_groups(make_net, [(x_train, x_test)], y_train, y_test, seeds, config,
+                        progress)[0]
 
-    Each seed's net starts from the weights ``make_net`` gives after ``torch.manual_seed(seed)``
+
+def train_groups(
+    make_net: Callable[[int], nn.Module],
+    inputs: Sequence[tuple[np.ndarray, np.ndarray]],
+    y_train: np.ndarray,
+    y_test: np.ndarray,
+    seeds: Sequence[int],
+    config: TrainConfig = TrainConfig(),
+    progress: bool = False,
+) -> list[list[TrainResult]]:
+    """One net per seed for each of several inputs of the same samples, e.g. the features
+    alone and with the logical item: all trained at once. ``inputs`` holds (train, test)
+    arrays with one row per sample of ``y_train`` / ``y_test``; one list of results (one per
+    seed) per input.
+
+    Each net starts from the weights ``make_net(width)`` gives after ``torch.manual_seed(seed)``
     and sees its own order of mini-batches (a generator seeded with ``seed``), as if trained
     alone. The nets' layers are stacked into batched matrix products (`StackedNets`), so a
-    step pays torch's per-operation overhead once for all seeds: for the paper's 5-unit net
+    step pays torch's per-operation overhead once for all of them: for the paper's 5-unit net
     that overhead is nearly all of the time (five seeds cost what one did; torch.vmap over
-    torch.func's stacked state, tried first, cost twice as much per step). The loss is the sum
-    of the nets' mean losses, so each net's gradient is its own, and Adam updates each element
-    on its own: the numbers equal separate runs up to float rounding (tests/test_train.py)."""
+    torch.func's stacked state, tried first, cost twice as much per step). Narrower inputs
+    are padded with zero columns, whose weights start at zero and get zero gradients, so they
+    stay zero. The loss is the sum of the nets' mean losses, so each net's gradient is its
+    own, and Adam updates each element on its own: the numbers equal separate runs up to float
+    rounding (tests/test_train.py)."""
     seeds = [int(s) for s in seeds]
     if not seeds:
         raise ValueError("train_seeds needs at least one seed")
-    if len(x_train) == 0 or len(x_test) == 0:
-        raise ValueError("training and test sets must not be empty")
+    if not inputs:
+        raise ValueError("train_groups needs at least one input")
     if config.epochs < 1 or config.batch_size < 1:
         raise ValueError(f"epochs and batch_size must be >= 1, got {config}")
+    for x_train, x_test in inputs:
+        if len(x_train) == 0 or len(x_test) == 0:
+            raise ValueError("training and test sets must not be empty")
+        if len(x_train) != len(y_train) or len(x_test) != len(y_test):
+            raise ValueError("every input needs one row per label")
     torch.set_num_threads(1)
-    scaler = Standardiser.fit(x_train)
-    xt, yt = torch.from_numpy(scaler(x_train)), torch.from_numpy(y_train.astype(np.int64))
-    xv, yv = torch.from_numpy(scaler(x_test)), torch.from_numpy(y_test.astype(np.int64))
+    scalers = [Standardiser.fit(x_train) for x_train, _ in inputs]
+    width = max(x_train.shape[1] for x_train, _ in inputs)
+    pairs = list(zip(scalers, inputs, strict=True))
+    xt = torch.stack([_padded(scaler(x), width) for scaler, (x, _) in pairs])
+    xv = torch.stack([_padded(scaler(x), width) for scaler, (_, x) in pairs])
+    yt = torch.from_numpy(y_train.astype(np.int64))
+    yv = torch.from_numpy(y_test.astype(np.int64))
     models = []
-    for seed in seeds:
-        torch.manual_seed(seed)
-        models.append(make_net(xt.shape[1]))
-    stack = StackedNets(models, probe=xt[:8])
+    for x_train, _ in inputs:
+        for seed in seeds:
+            torch.manual_seed(seed)
+            models.append(make_net(x_train.shape[1]))
+    group = torch.arange(len(inputs)).repeat_interleave(len(seeds))  # the input of each net
+    stack = StackedNets(models, probe=xt[group, :8])
     optimiser = torch.optim.Adam(stack.parameters(), lr=config.lr,
                                  weight_decay=config.weight_decay)
     orders = [torch.Generator().manual_seed(seed) for seed in seeds]
+    test_inputs = xv[group]
     errors, losses = [], []
     epochs = range(config.epochs)
     if progress:
         from tqdm.auto import tqdm
 
         epochs = tqdm(epochs, desc=f"train seeds {seeds}", leave=False)
+    n_nets, n = len(models), len(yt)
     for _ in epochs:
-        order = torch.stack([torch.randperm(len(xt), generator=g) for g in orders])
-        total = torch.zeros(len(seeds))
+        order = torch.stack([torch.randperm(n, generator=g) for g in orders]).repeat(
+            len(inputs), 1)
+        total = torch.zeros(n_nets)
         for batch in order.split(config.batch_size, dim=1):
             optimiser.zero_grad()
-            each = nn.functional.cross_entropy(stack(xt[batch]).flatten(0, 1),
-                                               yt[batch].flatten(),
-                                               reduction="none").view(len(seeds), -1).mean(1)
+            logits = stack(xt[group[:, None], batch])
+            each = nn.functional.cross_entropy(logits.flatten(0, 1), yt[batch].flatten(),
+                                               reduction="none").view(n_nets, -1).mean(1)
             each.sum().backward()
             optimiser.step()
             total += each.detach() * batch.shape[1]
-        losses.append((total / len(xt)).tolist())
+        losses.append((total / n).tolist())
         with torch.no_grad():
-            wrong = (stack(xv).argmax(-1) != yv).sum(1)
+            wrong = (stack(test_inputs).argmax(-1) != yv).sum(1)
         errors.append([w / len(yv) for w in wrong.tolist()])
     stack.write_back()
-    results = []
-    for k, (seed, model) in enumerate(zip(seeds, models, strict=True)):
+    results: list[list[TrainResult]] = [[] for _ in inputs]
+    for k, model in enumerate(models):
         model.eval()
+        g, seed = int(group[k]), seeds[k % len(seeds)]
         curve = [epoch[k] for epoch in errors]
-        results.append(TrainResult(seed, curve, [epoch[k] for epoch in losses],
-                                   1.0 - curve[-1], model, scaler))
+        results[g].append(TrainResult(seed, curve, [epoch[k] for epoch in losses],
+                                      1.0 - curve[-1], model, scalers[g]))
     return results
+
+
+def _padded(x: np.ndarray, width: int) -> torch.Tensor:
+    """``x`` with zero columns appended up to ``width``."""
+    out = torch.zeros(len(x), width)
+    out[:, :x.shape[1]] = torch.from_numpy(x)
+    return out
 
 
 def train_baseline_and_sann(
@@ -160,10 +201,9 @@ def train_baseline_and_sann(
 ) -> list[dict[str, TrainResult]]:
     """The paper's comparison on one dataset: the net on ``data``'s features (named
     ``baseline``) and SANN, the same net on the ``fused`` (train, test) features with the
-    logical item, each net kind's seeds trained together; one pair per seed."""
-    plain = train_seeds(make_net, data.X_train, data.y_train, data.X_test, data.y_test, seeds,
-                        config)
-    sann = train_seeds(make_net, fused[0], data.y_train, fused[1], data.y_test, seeds, config)
+    logical item, all trained together; one pair per seed."""
+    plain, sann = train_groups(make_net, [(data.X_train, data.X_test), fused], data.y_train,
+                               data.y_test, seeds, config)
     return [{baseline: a, "sann": b} for a, b in zip(plain, sann, strict=True)]
 
 
@@ -175,8 +215,10 @@ class StackedNets:
     """Nets of one architecture, made of ``nn.Linear`` layers and elementwise activations
     applied in the order they are registered, run as one net on a batch per net: each
     Linear's weights become one (nets, in, out) tensor and its forward a batched matrix
-    product. ``probe`` rows check that the stack computes what each net computes (a net whose
-    forward does something else is refused)."""
+    product; a Linear narrower than the widest of its position (the first layer of a net with
+    fewer inputs) is padded with zero rows, for inputs padded with zero columns. ``probe``
+    rows (shared, or one batch per net) check that the stack computes what each net computes
+    (a net whose forward does something else is refused)."""
 
     def __init__(self, models: Sequence[nn.Module], probe: torch.Tensor) -> None:
         self.models = list(models)
@@ -188,7 +230,9 @@ class StackedNets:
         with torch.no_grad():
             mine = self(probe)
             for k, net in enumerate(self.models):
-                if not torch.allclose(mine[k], net(probe), atol=1e-5):
+                mine_k = probe if probe.dim() == 2 else probe[k]
+                first = next(m for m in net.modules() if isinstance(m, nn.Linear))
+                if not torch.allclose(mine[k], net(mine_k[:, :first.in_features]), atol=1e-5):
                     raise ValueError(
                         f"{type(net).__name__} cannot be stacked: its forward is not its "
                         "Linear layers and activations in the order they are registered")
@@ -197,7 +241,10 @@ class StackedNets:
     def _stack(position: tuple[nn.Module, ...]):
         first = position[0]
         if isinstance(first, nn.Linear):
-            weight = torch.stack([m.weight.detach().T for m in position]).contiguous()
+            width = max(m.in_features for m in position)
+            weight = torch.zeros(len(position), width, first.out_features)
+            for k, m in enumerate(position):
+                weight[k, :m.in_features] = m.weight.detach().T
             bias = (None if first.bias is None
                     else torch.stack([m.bias.detach()[None] for m in position]))
             return (weight.requires_grad_(),
@@ -233,7 +280,7 @@ class StackedNets:
             for k, net in enumerate(self.models):
                 mine = [m for m in net.modules() if isinstance(m, nn.Linear)]
                 for module, (weight, bias) in zip(mine, linear, strict=True):
-                    module.weight.copy_(weight[k].T)
+                    module.weight.copy_(weight[k, :module.in_features].T)
                     if bias is not None:
                         module.bias.copy_(bias[k, 0])
 

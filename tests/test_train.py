@@ -13,6 +13,7 @@ from sann.train import (
     intervals_overlap,
     summarise,
     train,
+    train_groups,
     train_seeds,
 )
 
@@ -93,6 +94,28 @@ def test_seeds_trained_together_equal_each_seed_trained_alone(make):
     with torch.no_grad():
         probe = torch.from_numpy(together[2].standardiser(xv))
         np.testing.assert_allclose(together[2].model(probe), alone.model(probe), atol=1e-4)
+
+
+@pytest.mark.parametrize("make", [lambda n: ShallowNet(n, hidden=5),
+                                  lambda n: DeepNet(n, hidden=(6, 4))], ids=["shallow", "deep"])
+def test_inputs_of_different_widths_trained_together_equal_each_alone(make):
+    """The features alone and with one more column (the ANN and SANN of a dataset): the
+    narrower input is padded with a zero column inside the stack, which changes nothing."""
+    x, y = _xor_like(300, 0)
+    xv, yv = _xor_like(100, 1)
+    extra = np.column_stack([x, x[:, 0] * x[:, 1]]).astype(np.float32)
+    extra_v = np.column_stack([xv, xv[:, 0] * xv[:, 1]]).astype(np.float32)
+    config = TrainConfig(epochs=5, batch_size=32, lr=0.02)
+    plain, fused = train_groups(make, [(x, xv), (extra, extra_v)], y, yv, [4, 0], config)
+    for runs, (xt, xe) in ((plain, (x, xv)), (fused, (extra, extra_v))):
+        assert [r.seed for r in runs] == [4, 0]
+        for run in runs:
+            assert run.model(torch.zeros(1, xt.shape[1])).shape == (1, 2)
+            losses, errors = _one_net_alone(make, xt, y, xe, yv, run.seed, config)
+            np.testing.assert_allclose(run.train_loss, losses, rtol=1e-5)
+            assert np.abs(np.array(run.test_error) - errors).max() <= 1 / len(yv)
+    with pytest.raises(ValueError, match="one row per label"):
+        train_groups(make, [(x, xv), (extra[:-1], extra_v)], y, yv, [1], config)
 
 
 def test_train_seeds_refuses_empty_input():

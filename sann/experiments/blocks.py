@@ -41,7 +41,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -56,7 +56,7 @@ from sann.tasks.blocks import (
     BlockWorldParams,
     make_dataset,
 )
-from sann.train import TrainConfig, TrainResult, train_seeds
+from sann.train import TrainConfig, TrainResult, train_groups
 from sann.viz import plots
 
 KINDS = ("D1", "D2")
@@ -197,23 +197,24 @@ def epochs_for(n_samples: int, config: BlocksExperiment) -> int:
     return max(config.train.epochs, math.ceil(config.min_steps / batches))
 
 
-def train_nets(x_train: np.ndarray, y_train: np.ndarray, x_test: np.ndarray,
-               y_test: np.ndarray, config: BlocksExperiment) -> list[TrainResult]:
-    """The shallow net trained with every initialisation seed on one input."""
-    train = TrainConfig(epochs=epochs_for(len(x_train), config),
+def train_nets(inputs: list[tuple[np.ndarray, np.ndarray]], y_train: np.ndarray,
+               y_test: np.ndarray, config: BlocksExperiment) -> list[list[TrainResult]]:
+    """The shallow net trained with every initialisation seed on each (train, test) input of
+    the same samples, all at once (`train_groups`); one list of runs per input."""
+    train = TrainConfig(epochs=epochs_for(len(y_train), config),
                         batch_size=config.train.batch_size, lr=config.train.lr,
                         weight_decay=config.train.weight_decay)
-    return train_seeds(lambda n: ShallowNet(n, hidden=config.hidden), x_train, y_train,
-                       x_test, y_test, list(range(config.seeds)), train)
+    return train_groups(lambda n: ShallowNet(n, hidden=config.hidden), inputs, y_train, y_test,
+                        list(range(config.seeds)), train)
 
 
 def train_pair(data, config: BlocksExperiment, seed: int) -> dict[str, TrainResult]:
     """Train the standard ANN and SANN on one dataset with one seed (the t-SNE figures)."""
     inputs = net_inputs(data, data.kind)
-    return {net: train_seeds(lambda n: ShallowNet(n, hidden=config.hidden), inputs[net][0],
-                             data.y_train, inputs[net][1], data.y_test, [seed],
-                             config.train)[0]
-            for net in CURVE_NETS}
+    runs = train_groups(lambda n: ShallowNet(n, hidden=config.hidden),
+                        [inputs[net] for net in CURVE_NETS], data.y_train, data.y_test, [seed],
+                        config.train)
+    return {net: group[0] for net, group in zip(CURVE_NETS, runs, strict=True)}
 
 
 # --------------------------------------------------------------------------- evaluation
@@ -270,17 +271,18 @@ def _evaluate(kind: str, mode: str, data_seed: int, config: BlocksExperiment,
         "rules_test": rules, "control_test": inputs["control"][1][:, -1],
         "logical_test": data.logical_test,
     }
-    for net in NETS:
-        runs = train_nets(inputs[net][0], y_train, inputs[net][1], y_test, config)
+    full = train_nets([inputs[net] for net in NETS], y_train, y_test, config)
+    for net, runs in zip(NETS, full, strict=True):
         out[net] = np.stack([r.predict(inputs[net][1]) == y_test for r in runs])
         out[f"error_{net}"] = np.array([r.test_error for r in runs])
+    curves: dict[str, list[np.ndarray]] = {net: [] for net in CURVE_NETS}
+    for k in config.sizes[:-1]:
+        grouped = train_nets([(inputs[net][0][:k], inputs[net][1]) for net in CURVE_NETS],
+                             y_train[:k], y_test, config)
+        for net, runs in zip(CURVE_NETS, grouped, strict=True):
+            curves[net].append(np.stack([r.predict(inputs[net][1]) == y_test for r in runs]))
     for net in CURVE_NETS:
-        curve = []
-        for k in config.sizes[:-1]:
-            x_train = inputs[net][0][:k]
-            runs = train_nets(x_train, y_train[:k], inputs[net][1], y_test, config)
-            curve.append(np.stack([r.predict(inputs[net][1]) == y_test for r in runs]))
-        out[f"curve_{net}"] = np.stack([*curve, out[net]])
+        out[f"curve_{net}"] = np.stack([*curves[net], out[net]])
     return out
 
 
@@ -423,15 +425,60 @@ def tsne_layers(data, runs: dict[str, TrainResult], points: int, seed: int) -> d
     return {"maps": maps, "labels": data.y_test[chosen]}
 
 
+#: The datasets by how long planning and training them took in a book build, longest first
+#: (D2 plans one scene per sample; C3's scenes are the hardest to plan, C2's the easiest).
+LONGEST_FIRST = (("D2", "C3"), ("D2", "C1"), ("D2", "C2"), ("D1", "C3"), ("D1", "C2"),
+                 ("D1", "C1"))
+
+
+def _evaluate_task(task: tuple) -> tuple[tuple[str, str, int], dict[str, np.ndarray]]:
+    kind, mode, seed, config, progress = task
+    return (kind, mode, seed), evaluate(kind, mode, seed, config, progress)
+
+
+def evaluate_all(config: BlocksExperiment, progress: bool = False
+                 ) -> dict[tuple[str, str], list[dict[str, np.ndarray]]]:
+    """Every (dataset, data seed) evaluation, from the cache where possible. The missing ones
+    are computed ``config.workers`` at a time (None: one per core), each in one forked
+    process that plans its scenes and trains its nets, the longest first: planning alone
+    was parallel before, and training kept one core busy. Every scene and every net has its
+    own seed, so the numbers do not depend on which process computed them."""
+    from sann import cache
+    from sann.tasks.blocks import _check_workers
+
+    found: dict[tuple[str, str, int], dict[str, np.ndarray]] = {}
+    missing = []
+    for kind, mode in LONGEST_FIRST:
+        for seed in config.data_seeds:
+            key = cache.make_key(_description(kind, mode, seed, config))
+            arrays = cache.load(f"blocks-eval-{kind}-{mode}", key)
+            if arrays is None:
+                missing.append((kind, mode, seed))
+            else:
+                found[(kind, mode, seed)] = arrays
+    workers = min(_check_workers(config.workers), len(missing))
+    if workers <= 1:
+        for kind, mode, seed in missing:
+            found[(kind, mode, seed)] = evaluate(kind, mode, seed, config, progress)
+    else:
+        import multiprocessing as mp
+
+        alone = replace(config, workers=1)  # no pool inside a pool
+        tasks = [(kind, mode, seed, alone, progress) for kind, mode, seed in missing]
+        with mp.get_context("fork").Pool(workers) as pool:
+            for task, arrays in pool.imap_unordered(_evaluate_task, tasks):
+                found[task] = arrays
+    return {(kind, mode): [found[(kind, mode, seed)] for seed in config.data_seeds]
+            for kind in KINDS for mode in MODES}
+
+
 def run(out: str | Path, config: BlocksExperiment = BlocksExperiment(),
         progress: bool = False) -> dict:
     """Evaluate the six datasets over the data seeds (from the cache where possible), write
     results.json and the figures into ``out``; returns the results."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    evals = {(kind, mode): [evaluate(kind, mode, seed, config, progress)
-                            for seed in config.data_seeds]
-             for kind in KINDS for mode in MODES}
+    evals = evaluate_all(config, progress)
     results = results_for(evals, config)
     _figures(out, results, config)
     (out / "results.json").write_text(json.dumps(results, indent=1))

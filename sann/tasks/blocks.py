@@ -714,19 +714,26 @@ def _scene_samples(kind: str, mode: str, split: str, index: int, cap: int | None
             [_plan_text(q) for q in seqs])
 
 
-_WORKER: dict = {}
+_PLANNERS: dict = {}
 
 
-def _worker_init(config) -> None:
+def _planner(config):
+    """One planner per configuration (and rule text) in a process, made before any pool forks
+    so that the workers inherit it: sourcing the rules costs about a second per process."""
+    from sann import cache
     from sann.tasks.planning import Planner
 
-    _WORKER["planner"] = Planner(config)
+    key = (config, cache.file_sha256(config.rules))
+    if key not in _PLANNERS:
+        _PLANNERS[key] = Planner(config)
+    return _PLANNERS[key]
 
 
 def _worker_chunk(args: tuple) -> list[tuple]:
-    kind, mode, split, jobs, first_image, seed, params = args
-    return [_scene_samples(kind, mode, split, index, cap, first_image, seed, params,
-                           _WORKER["planner"]) for index, cap in jobs]
+    kind, mode, split, jobs, first_image, seed, params, config = args
+    planner = _planner(config)
+    return [_scene_samples(kind, mode, split, index, cap, first_image, seed, params, planner)
+            for index, cap in jobs]
 
 
 def _collect(split: str, parts: list[tuple]) -> dict[str, np.ndarray]:
@@ -750,24 +757,22 @@ def _run_jobs(kind: str, mode: str, split: str, jobs: list, first_image: int, se
               params: BlockWorldParams, config, workers: int, bar) -> list[tuple]:
     """Plan the scenes of ``jobs`` in this process or in a pool; results in scene order."""
     parts: list[tuple] = []
+    planner = _planner(config)
     if workers == 1:
-        from sann.tasks.planning import Planner
-
-        with Planner(config) as planner:
-            for index, cap in jobs:
-                part = _scene_samples(kind, mode, split, index, cap, first_image, seed, params,
-                                      planner)
-                parts.append(part)
-                if bar is not None:
-                    bar.update(len(part[2]))
+        for index, cap in jobs:
+            part = _scene_samples(kind, mode, split, index, cap, first_image, seed, params,
+                                  planner)
+            parts.append(part)
+            if bar is not None:
+                bar.update(len(part[2]))
         return parts
     import multiprocessing as mp
 
     size = max(1, min(25, len(jobs) // (4 * workers)))
-    chunks = [(kind, mode, split, jobs[i:i + size], first_image, seed, params)
+    chunks = [(kind, mode, split, jobs[i:i + size], first_image, seed, params, config)
               for i in range(0, len(jobs), size)]
     ctx = mp.get_context("fork")
-    with ctx.Pool(workers, initializer=_worker_init, initargs=(config,)) as pool:
+    with ctx.Pool(workers) as pool:
         for chunk in pool.imap(_worker_chunk, chunks):
             parts += chunk
             if bar is not None:

@@ -6,7 +6,9 @@ of its inputs): the tests read that log to see which chapters a build executed.
 
 from __future__ import annotations
 
+import json
 import os
+import re
 import subprocess
 import sys
 import textwrap
@@ -115,6 +117,11 @@ def test_each_build_executes_exactly_the_chapters_whose_inputs_changed(book: Pat
     """One book through a series of edits (each build costs a Sphinx start and kernels)."""
     assert built(book) == ["a", "b", "c", "d"]
     assert "sp {a" in html(book, "a")
+    records = list((book / "book/_build/.jupyter_cache" / bookcache.RECORDS).glob("*.json"))
+    assert len(records) == 4
+    for record in records:  # the kernel's CPU seconds: at least its start (imports)
+        data = json.loads(record.read_text())
+        assert 0.05 < data["execution_cpu_seconds"] < 60, data
     executed = nbformat.read(book / "book" / "_build" / "jupyter_execute" / "a.ipynb", 4)
     assert "sp {a" in executed.cells[-1].outputs[0]["text"]
     # nothing changed: nothing is executed
@@ -157,3 +164,80 @@ def test_a_failed_execution_leaves_no_cache_entry(book: Path) -> None:
     c.write_text(chapter("c", 'print("c fixed")'))
     assert built(book) == ["c"]
     assert "c fixed" in html(book, "c")
+
+
+LIVE_CONF = """
+import sys
+from pathlib import Path
+sys.path.insert(0, str(Path(__file__).parent))
+extensions = ["live_ext"]
+exclude_patterns = ["_build"]
+html_static_path = ["_static"]
+
+
+def setup(app):
+    from sann.soar.lexer import SoarLexer
+    app.add_lexer("soar", SoarLexer)
+"""
+
+
+@pytest.fixture
+def live_book(tmp_path: Path) -> Path:
+    """A book of two pages, ``a`` with a live Soar block and ``b`` without, built with a copy
+    of book/live_ext.py and book/_static/live beside its conf.py; the rest of the repository
+    (the engine it packs, Pyodide's node_modules) is linked in."""
+    import importlib.util
+    import shutil
+
+    spec = importlib.util.spec_from_file_location("live_ext", bookcache.ROOT / "book/live_ext.py")
+    live_ext = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(live_ext)
+    live_ext._npm_ci()  # the build copies Pyodide from the repository's node_modules
+    for name in ("sann", "grammars", "node_modules", "package.json", "package-lock.json"):
+        (tmp_path / name).symlink_to(bookcache.ROOT / name)
+    (tmp_path / "rules").mkdir()
+    (tmp_path / "rules" / "a.soar").write_text("sp {a (state <s>) --> (<s> ^a 1)}\n")
+    src = tmp_path / "book"
+    shutil.copytree(bookcache.ROOT / "book" / "_static" / "live", src / "_static" / "live")
+    shutil.copy(bookcache.ROOT / "book" / "live_ext.py", src / "live_ext.py")
+    (src / "conf.py").write_text(LIVE_CONF)
+    (src / "index.rst").write_text("Tiny\n====\n\n.. toctree::\n\n   a\n   b\n")
+    (src / "a.rst").write_text("A\n=\n\n.. literalinclude:: ../rules/a.soar\n"
+                               "   :language: soar\n")
+    (src / "b.rst").write_text("B\n=\n\nNo Soar here.\n")
+    return tmp_path
+
+
+def written(book: Path) -> dict[str, int]:
+    """When each page's HTML was written (ns)."""
+    return {name: (book / "book/_build/html" / f"{name}.html").stat().st_mtime_ns
+            for name in ("a", "b")}
+
+
+def test_a_live_ext_or_live_script_change_rewrites_the_pages(live_book: Path) -> None:
+    built(live_book)
+    assert "sann-live-meta" in html(live_book, "a")
+    assert "sann-live-meta" not in html(live_book, "b")
+    first = written(live_book)
+    built(live_book)
+    assert written(live_book) == first  # nothing changed: no page written
+    # the extension changes the metadata it writes: the page with live cells is read again
+    ext = live_book / "book" / "live_ext.py"
+    code = ext.read_text()
+    marked = "meta.update(index=index, shipped=text, page=app.env.docname)"
+    assert marked in code
+    ext.write_text(code.replace(marked, marked[:-1] + ", edition=2)"))
+    built(live_book)
+    assert "&quot;edition&quot;: 2" in html(live_book, "a")
+    second = written(live_book)
+    assert all(second[n] > first[n] for n in first), "not every page was written again"
+    # a script every page loads: every page written again, with the script's new checksum
+    old = {n: re.search(r"live/live\.js\?v=(\w+)", html(live_book, n)).group(1) for n in first}
+    script = live_book / "book" / "_static" / "live" / "live.js"
+    script.write_text(script.read_text() + "\n// edited\n")
+    built(live_book)
+    new = {n: re.search(r"live/live\.js\?v=(\w+)", html(live_book, n)).group(1) for n in first}
+    assert all(new[n] != old[n] for n in first), (old, new)
+    third = written(live_book)
+    built(live_book)
+    assert written(live_book) == third

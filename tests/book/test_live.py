@@ -138,6 +138,59 @@ def test_an_edited_rule_changes_the_output(pages) -> None:
     page.check_clean()
 
 
+#: A runaway: one operator per decision, each counting one further, never halting.
+COUNT_FOREVER = """sp {count*init
+   (state <s> ^superstate nil -^count)
+-->
+   (<s> ^count 0)}
+
+sp {count*propose
+   (state <s> ^superstate nil ^count <c>)
+-->
+   (<s> ^operator <o> + =)
+   (<o> ^name count ^value <c>)}
+
+sp {count*apply
+   (state <s> ^operator <o> ^count <c>)
+   (<o> ^name count ^value <c>)
+-->
+   (<s> ^count <c> - (+ <c> 1))}
+"""
+
+
+def test_stop_ends_a_runaway_run_and_the_next_run_starts_a_new_worker(pages) -> None:
+    page = pages("soar-in-practice")
+    cell = water_jug_cell(page)
+    cell.get_by_role("button", name="Reset", exact=True).click()
+    assert "The problem has been solved." in run(cell)  # Python is up in the page's worker
+    (worker,) = page.page.workers
+    stop = cell.get_by_role("button", name="Stop", exact=True)
+    assert stop.is_disabled()  # nothing to stop
+    edit(cell, COUNT_FOREVER)
+    cell.locator(".sann-live-limit").fill("100000000")  # hours of decisions in the page
+    cell.get_by_role("button", name="Run", exact=True).click()
+    page.page.wait_for_timeout(1_500)
+    assert cell.locator(".sann-live-output .sann-live-stopped").count() == 0
+    stop.click()
+    stopped = cell.locator(".sann-live-output .sann-live-stopped")
+    stopped.wait_for(timeout=30_000)
+    assert re.search(r"Stopped after \d+\.\d s: the run did not finish", stopped.inner_text())
+    assert "next Run starts a new worker" in stopped.inner_text()
+    for _ in range(100):  # Playwright hears of the worker's end a little later
+        if worker not in page.page.workers:
+            break
+        page.page.wait_for_timeout(100)
+    assert worker not in page.page.workers, "the stopped worker is still alive"
+    assert stop.is_disabled()
+    cell.get_by_role("button", name="Reset", exact=True).click()
+    output = run(cell)
+    assert "The problem has been solved." in output and "halted" in output
+    assert "Python started in" in cell.locator(".sann-live-status").inner_text()
+    (fresh,) = page.page.workers
+    assert fresh is not worker
+    page.check_clean()
+
+
 def test_a_syntax_error_shows_line_and_column(pages) -> None:
     page = pages("soar-in-practice")
     cell = water_jug_cell(page)

@@ -51,3 +51,15 @@ def test_the_archive_holds_the_package_sources() -> None:
     files = {name: source for source, name in _live_ext().engine_files()}
     for name in ("sann/soar/matching/rete.py", "sann/exercises.py", "sann/rules/hanoi.soar"):
         assert files[name] == ROOT / name
+
+
+def test_the_metadata_depends_on_the_project_modules_loaded() -> None:
+    """What a page with a computed scene or exercise notes as its dependencies: the project's
+    module sources loaded, none of the installed packages."""
+    import sann.exercises  # noqa: F401  (the exercises' metadata comes from it)
+
+    found = _live_ext().project_modules()
+    assert ROOT / "sann" / "exercises.py" in found
+    assert ROOT / "sann" / "soar" / "agent.py" in found  # compiled or not: its source
+    assert all(p.suffix == ".py" and p.is_relative_to(ROOT) for p in found)
+    assert not any(".venv" in p.parts or "site-packages" in p.parts for p in found)

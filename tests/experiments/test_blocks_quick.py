@@ -1,6 +1,7 @@
 """`python -m sann reproduce blocks --quick` end to end, and the baselines it reports."""
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -128,6 +129,22 @@ def test_an_evaluation_is_deterministic_and_read_back_from_the_cache(monkeypatch
     for key in first:
         assert np.array_equal(first[key], again[key]), key
     assert cached == blocks.cached_results(TINY)
+
+
+def test_evaluations_do_not_depend_on_the_processes_that_computed_them(monkeypatch, tmp_path):
+    mini = replace(TINY, n_train=16, n_test=10, curve_sizes=(8,))
+    monkeypatch.setenv("SANN_CACHE", str(tmp_path / "alone"))
+    alone = blocks.evaluate_all(replace(mini, workers=1))
+    monkeypatch.setenv("SANN_CACHE", str(tmp_path / "pooled"))
+    pooled = blocks.evaluate_all(replace(mini, workers=2))
+    assert alone.keys() == pooled.keys() == {(k, m) for k in blocks.KINDS for m in blocks.MODES}
+    for dataset, evals in alone.items():
+        assert len(evals) == len(mini.data_seeds)
+        for mine, theirs in zip(evals, pooled[dataset], strict=True):
+            assert mine.keys() == theirs.keys()
+            for key in mine:
+                assert np.array_equal(mine[key], theirs[key]), (dataset, key)
+    assert blocks.cached_results(mini) is not None  # the pool's evaluations were cached
 
 
 def test_reproduce_rejects_bad_arguments():

@@ -1,9 +1,11 @@
 // The live book: every Soar code block of the page becomes a live cell (class sann-live) with
-// Run, Edit, Reset and Step buttons, an editor (class sann-live-editor: a textarea over a
-// highlighted layer) and an output (class sann-live-output). Cells are found through the
+// Run, Edit, Reset, Step and Stop buttons, an editor (class sann-live-editor: a textarea over
+// a highlighted layer) and an output (class sann-live-output). Cells are found through the
 // hidden metadata elements book/live_ext.py puts before each block. Runs go to one Web Worker
-// per page (worker.mjs: the engine on Pyodide), started at the first Run; a page opened from
-// disk (file://) cannot start workers, so it says how to serve the book instead.
+// per page (worker.mjs: the engine on Pyodide), started at the first Run; Stop terminates it
+// (Python cannot be interrupted from outside a running call), and the next request starts a
+// new one. A page opened from disk (file://) cannot start workers, so it says how to serve
+// the book instead.
 (function () {
   "use strict";
   const script = document.currentScript;
@@ -15,6 +17,9 @@
   let worker = null;
   let nextId = 1;
   const pending = new Map();
+
+  /** A request that never got its answer because Stop terminated the worker. */
+  class Stopped extends Error {}
 
   function request(op, body) {
     if (!worker) {
@@ -35,6 +40,17 @@
       pending.set(id, { resolve, reject });
       worker.postMessage({ id, op, request: body });
     });
+  }
+
+  /** Terminate the worker: every waiting request fails as Stopped, and every cell forgets
+   *  its agent and stepping state, which lived in the worker. */
+  function stopWorker() {
+    if (!worker) return;
+    worker.terminate();
+    worker = null;
+    for (const waiting of pending.values()) waiting.reject(new Stopped("stopped"));
+    pending.clear();
+    for (const cell of cells) if (cell) cell.stepping = false;
   }
 
   function button(text, title, onClick) {
@@ -102,6 +118,10 @@
       this.resetButton = button("Reset", "Back to the book's text", () => this.reset());
       this.phaseButton = button("Step phase", "Run one phase of the decision cycle", () => this.step("phase"));
       this.decisionButton = button("Step decision", "Run one decision cycle", () => this.step("decision"));
+      this.stopButton = button("Stop", "Stop the run: ends the page's Python worker, with every cell's agent " +
+                               "(the next Run starts a new one)", () => stopWorker());
+      this.stopButton.classList.add("sann-live-stop");
+      this.stopButton.disabled = true;
       this.trace = element("select", "sann-live-trace");
       this.trace.title = "Trace level (watch)";
       for (const [value, label] of TRACE_LEVELS) {
@@ -118,7 +138,7 @@
       const limitLabel = element("label", "sann-live-limit-label", "limit ");
       limitLabel.appendChild(this.limit);
       bar.append(this.runButton, this.editButton, this.resetButton, this.phaseButton,
-                 this.decisionButton, this.trace, limitLabel);
+                 this.decisionButton, this.stopButton, this.trace, limitLabel);
       const looks = element("span", "sann-live-looks");
       const LOOKS = [["print S1", "print --depth 2 S1"], ["output-link", "print --depth 3 I3"],
                      ["matches", "matches"], ["preferences", "preferences"]];
@@ -216,8 +236,22 @@
 
     busy(on, what) {
       for (const b of this.root.querySelectorAll("button")) b.disabled = on;
+      this.stopButton.disabled = !on;
       this.root.classList.toggle("sann-live-busy", on);
-      if (on) this.note(worker ? `${what}…` : `${what}: starting Python in the page (a few seconds the first time)…`);
+      if (on) {
+        this.started = performance.now();
+        this.note(worker ? `${what}…` : `${what}: starting Python in the page (a few seconds the first time)…`);
+      }
+    }
+
+    /** Say in the output that Stop ended this cell's request, and how long it had run. */
+    showStopped(what) {
+      const seconds = ((performance.now() - this.started) / 1000).toFixed(1);
+      this.showText(`Stopped after ${seconds} s: ${what} did not finish. The page's Python ` +
+                    "worker was terminated, with the agents of every cell of this page; the " +
+                    "next Run starts a new worker.", "sann-live-stopped");
+      this.note("stopped");
+      this.root.dataset.stops = String(Number(this.root.dataset.stops || 0) + 1);
     }
 
     async run() {
@@ -229,8 +263,12 @@
         this.stepView.hidden = true;
         this.showRun(answer);
       } catch (error) {
-        this.showText(`The page could not run the cell: ${error.message}`, "sann-live-error");
-        this.note("");
+        if (error instanceof Stopped) {
+          this.showStopped("the run");
+        } else {
+          this.showText(`The page could not run the cell: ${error.message}`, "sann-live-error");
+          this.note("");
+        }
       } finally {
         this.busy(false);
       }
@@ -317,7 +355,8 @@
         this.showQuery(answer);
         this.note("");
       } catch (error) {
-        this.showText(`The page could not ask the agent: ${error.message}`, "sann-live-error");
+        if (error instanceof Stopped) this.showStopped(command);
+        else this.showText(`The page could not ask the agent: ${error.message}`, "sann-live-error");
       } finally {
         this.busy(false);
       }
@@ -341,7 +380,12 @@
         this.showStep(answer);
         this.note(`${unit} stepped in ${(answer.ms / 1000).toFixed(2)} s`);
       } catch (error) {
-        this.showText(`The page could not step the cell: ${error.message}`, "sann-live-error");
+        if (error instanceof Stopped) {
+          this.stepView.hidden = true;
+          this.showStopped(`the ${unit} step`);
+        } else {
+          this.showText(`The page could not step the cell: ${error.message}`, "sann-live-error");
+        }
       } finally {
         this.busy(false);
       }
