@@ -33,9 +33,8 @@ MODULES = ("memory", "preferences", "instantiation", "decide", "goals", "agent",
            "matching.symbols", "matching.variables", "matching.matches", "matching.oracle",
            "matching.tokens", "matching.plan", "matching.templates", "matching.alpha",
            "matching.nodes", "matching.query", "matching.query_ncc", "matching.runs",
-           "matching.production_node",
-           "matching.join_order", "matching.build", "matching.rete", "matching.kernel_prefix",
-           "matching.kernel_order")
+           "matching.production_node", "matching.join_order", "matching.build",
+           "matching.rete", "matching.kernel_prefix", "matching.kernel_order")
 #: The shared library of the compiled modules is ``sann/soar/_engine__mypyc.*.so``.
 GROUP = f"{PACKAGE}._engine"
 MANIFEST = HERE / "_engine.sha256"
