@@ -57,6 +57,7 @@ MODULES = (
     "matching.templates",
     "matching.alpha",
     "matching.nodes",
+    "matching.query",
     "matching.query_ncc",
     "matching.runs",
     "matching.production_node",

@@ -59,7 +59,7 @@ def _node_keys(ordered: list[KCond]) -> list[object]:
     the variables numbered in order of appearance, so that equal prefixes share nodes.
     Worked out once per order (``reorder.kernel_conditions`` shares its lists)."""
     hit = _NODE_KEYS.get(id(ordered))
-    if hit is not None and hit[0] is ordered:
+    if hit is not None and hit[0] is ordered:  # (the order the keys are of, the keys)
         return hit[1]
     names: dict[str, str] = {}
 
@@ -172,13 +172,13 @@ class KernelOrder:
         pnode.users = 1
         path.append((node, ("p", production.name), pnode))
         self._paths[production.name] = path
-        below = [-step[2].serial for step in path]
+        below = [-node.serial for _, _, node in path]
         conditions = production.conditions
         places: dict[int, Place] = {}
         for k, (index, position, length) in enumerate(joins):
             if index not in places:
-                join = path[length - 1][2]
-                before = tuple(dict.fromkeys(j[0] for j in joins[:k]))
+                _, _, join = path[length - 1]
+                before = tuple(dict.fromkeys(written for written, _, _ in joins[:k]))
                 cond = conditions[index]
                 mask = ((2 if type(cond.attr_test) is Const else 0)  # type: ignore[union-attr]
                         | (4 if type(cond.value_test) is Const else 0))  # type: ignore[union-attr]

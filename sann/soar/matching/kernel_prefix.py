@@ -80,7 +80,7 @@ def _rechecks(ordered: list) -> list[tuple[int, ...]]:
     search's list of chosen WMEs) whose relational tests wait for a variable it binds
     first: they are tested again when it joins, as the kernel's Rete moves them."""
     hit = _RECHECKS.get(id(ordered))
-    if hit is not None and hit[0] is ordered:
+    if hit is not None and hit[0] is ordered:  # (the order they are of, the rechecks)
         return hit[1]
     bound: set[str] = set()
     waiting: list[set[str]] = []  # per positive condition so far: its relational variables
