@@ -9,9 +9,10 @@ in, and the chunk itself.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 from ..printer import format_production
+from .learn import Chunker
 
 if TYPE_CHECKING:
     from ..agent import Agent
@@ -26,7 +27,7 @@ def _row(label: str, value: int) -> str:
 
 def stats_text(agent: Agent) -> str:
     """``chunk stats``, in the kernel's layout."""
-    s = agent.chunker.stats
+    s = cast(Chunker, agent.chunker).stats
     return "".join([
         _RULE + "\n", f"{'Explanation-Based Chunking Statistics':^75}".rstrip() + "\n",
         _RULE + "\n",
@@ -48,7 +49,7 @@ def stats_text(agent: Agent) -> str:
 def explain_text(agent: Agent, args: tuple[str, ...]) -> str:
     """``explain``: a summary of what was recorded, or one chunk's formation."""
     words = [word for word in args if word != "chunk"]
-    records = agent.chunker.records
+    records = cast(Chunker, agent.chunker).records
     if not words:
         names = "".join(f"  {name}\n" for name in records) or "  (none)\n"
         return f"Chunks recorded: {len(records)}\n{names}"

@@ -75,6 +75,11 @@ class Learner(Protocol):
                 ex: Any) -> tuple[Instantiation, bool]: ...
     def mark(self, function: str, state: object) -> None: ...
 
+    #: what backtracing reads back: the match of each chunk's own instantiation, and the
+    #: instantiations of the preferences that chose each substate operator
+    matches: dict[Instantiation, object]
+    selection: dict[WME, list[Instantiation]]
+
 
 class AgentState:
     """The decision cycle's data (see the module docstring)."""
@@ -83,9 +88,14 @@ class AgentState:
     learning: str
     chunker: Learner
 
-    # declared here: assigned first outside ``__init__`` (mypyc takes the first type)
+    # declared here: assigned first outside ``__init__`` (mypyc takes the first type), or
+    # by the functions that make the top state (``substates.ids_new_after_top``)
     _input_handle: InputHandle | None
     _traced_adds: list[WME]
+    _top: Goal
+    _io_id: Identifier
+    _input_link_id: Identifier
+    _output_link_id: Identifier
 
     def __init__(self, name: str, matcher_class: type, out: TextIO | None) -> None:
         self.name = name
