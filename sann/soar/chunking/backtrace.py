@@ -303,10 +303,16 @@ def _local(agent: Agent, ex: Explanation, step: Step, cond: Condition, wme: WME,
             ex.ids.union(("state", wme.value), keys[2])
         return
     source = sources[0]
-    if _match_of(agent, source) is None:
-        return
     pref = _pref_of(source, wme)
-    if pref is None:
+    if (pref is None or not pref.live) and agent._wm.get(wme.timetag) is wme:
+        # its preference went while another kept the WME: the kernel moves the WME's
+        # preference to that one, for the firings matched after the move (measured in
+        # soar_sml: a count rewritten to the same value by a function is backtraced through
+        # the function, and its arguments literalized, by the rules that tested it later)
+        moved = _moved_support(agent, wme, step)
+        if moved is not None:
+            source, pref = moved
+    if pref is None or _match_of(agent, source) is None:
         return
     maker = _step(agent, ex, source, queue)
     action = maker.actions.get(id(pref))
@@ -331,6 +337,23 @@ def _selection_knowledge(agent: Agent, ex: Explanation, wme: WME, queue: list[St
     for inst in agent.chunker.selection.get(wme, ()):
         if _match_of(agent, inst) is not None:
             _step(agent, ex, inst, queue)
+
+
+def _moved_support(agent: Agent, wme: WME, step: Step) -> tuple[Instantiation, Preference] | None:
+    """The live preference that holds ``wme`` now, when its instantiation fired before
+    ``step`` matched (its newest WME is older than the step's newest)."""
+    newest = max((w.timetag for w in step.wmes if w is not None), default=0)
+    for other in agent._current_supports(wme):
+        if other is step.inst:
+            continue
+        match = _match_of(agent, other)
+        found = _pref_of(other, wme)
+        if match is None or found is None or not found.live:
+            continue
+        if max((w.timetag for w in match.wmes if w is not None),  # type: ignore[attr-defined]
+               default=0) < newest:
+            return other, found
+    return None
 
 
 def _field_key(ex: Explanation, step: Step, test: Test, tag: str) -> Hashable:
