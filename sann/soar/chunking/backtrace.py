@@ -131,6 +131,11 @@ def _step(agent: Agent, ex: Explanation, inst: Instantiation, queue: list[Step])
     if match is None:
         raise NotExplained(f"{inst.name} is not a rule firing")
     production: Production = match.production  # type: ignore[attr-defined]
+    info = agent._productions.get(production.name)
+    if info is not None and len(info.production.conditions) == len(production.conditions):
+        # the rule as written: the matcher's copy has relational tests moved where the
+        # kernel's Rete runs them (`reorder.with_kernel_relations`), which chunks do not show
+        production = info.production
     bindings = dict(match.bindings)  # type: ignore[attr-defined]
     actions = _align(production, inst, bindings)
     step = Step(len(ex.steps), inst, production, bindings, actions,

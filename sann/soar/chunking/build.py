@@ -323,6 +323,12 @@ def _negation(vz: Variablizer, element: Condition | ConjunctiveNegation,
         return ConjunctiveNegation(tuple(_negation(vz, inner, step)  # type: ignore[misc]
                                          for inner in element.conditions))
     tests = [vz.test(getattr(element, field), step, lhs=False) for field in FIELDS]
+    for k, test in enumerate(tests):
+        if _equality(test) is None:  # a variable, as the kernel's parser gives it
+            hint = str(tests[1].value) if isinstance(tests[1], Const) else "v"
+            local = vz.name(("fresh", vz.scope, id(element), k), hint)
+            vz.locals.add(local)
+            tests[k] = _conjoin([Var(local), test])
     is_state = vz.is_goal(step.bindings.get(equality_var(element.id_test) or ""), tests[0])
     return Condition(tests[0], tests[1], tests[2], element.negated, element.acceptable,
                      "state" if is_state else None)
