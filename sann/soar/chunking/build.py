@@ -143,7 +143,7 @@ def build_chunk(ex: Explanation, name: str) -> Production:
         if key not in seen:
             seen.add(key)
             conditions.append(negation)
-    conditions = _join_order(conditions)
+    conditions = _join_order(list(dict.fromkeys(conditions)))  # equal ones once
     actions = [_action(vz, action, step) for _, action, step in ex.results]
     production = Production(name, tuple(conditions), tuple(actions), flags=("chunk",))
     production = _check_production(production, FUNCTIONS.keys())
