@@ -171,3 +171,31 @@ def test_known_chunking_differences(name: str) -> None:
     assert sorted(ours.chunks) == sorted(kernel.chunks)
     for name_, production in kernel.chunks.items():
         assert same_chunk(production, ours.chunks[name_])
+
+
+def _learning_lines(text: str) -> list[str]:
+    return [line for line in text.splitlines()
+            if line.startswith(("Learning new rule", "Ignoring "))]
+
+
+def test_learning_trace_as_the_kernel_prints_it() -> None:
+    """``trace --learning print``: each rule learned, and each duplicate refused, by name."""
+    path = ROOT / "rules" / "classic" / "arithmetic.soar"
+    with KernelAgent() as ka:
+        for line in BEFORE:
+            ka.cmd(line)
+        ka.cmd(f"source {{{path}}}")
+        ka.cmd("trace --learning print")
+        ka.take_log()
+        ka.cmd(f"run {DECISIONS}")
+        theirs = _learning_lines(ka.take_log())
+    out = io.StringIO()
+    agent = Agent(out=out)
+    for line in BEFORE:
+        agent.load(line)
+    agent.source(path)
+    agent.load("trace --learning print")
+    agent.run(DECISIONS)
+    ours = _learning_lines(out.getvalue())
+    assert any(line.startswith("Ignoring ") for line in theirs)
+    assert ours == theirs
