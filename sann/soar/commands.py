@@ -120,6 +120,7 @@ _TRACE_IGNORED = (
 )  # fmt: skip
 
 
+_LEARNING_TRACE = ("noprint", "print", "fullprint")
 _TRACE_IGNORED_VALUES = ("0", "1", "2", "on", "off", "remove", "print", "noprint", "fullprint")
 
 
@@ -148,6 +149,8 @@ def _watch(agent: Agent, args: tuple[str, ...], base: Path) -> None:
                 if enable
                 else min(agent.trace_level, flag_level - 1)
             )
+        elif item in ("--learning", "-L") and items and items[0] in _LEARNING_TRACE:
+            agent.chunker.trace = items.pop(0)  # what is printed when a rule is learned
         elif item in _TRACE_IGNORED:
             if items and items[0] in _TRACE_IGNORED_VALUES:
                 items.pop(0)

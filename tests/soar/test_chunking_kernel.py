@@ -150,3 +150,52 @@ def test_water_jug_second_run_has_no_impasse() -> None:
     first, second = our_runs(ROOT / "rules" / "classic" / "water-jug-lookahead.soar")
     assert first.substates > 0 and second.substates == 0
     assert second.decisions < first.decisions
+
+
+#: classic programs whose chunks still differ from the kernel's, with what differs
+#: (strict xfails: the day one agrees, it joins CLASSIC)
+DIFFERING = {
+    "blocks-world-lookahead": "the kernel learns 2 chunks from the first success (substates "
+    "analyzed 2) where we learn one at every level the success passes (7)",
+    "tower-of-hanoi-recursive": "our chunkx2 keeps two spare-peg constraints (<> from, <> to) "
+    "the kernel's drops, and the kernel learns three chunkx3 where we learn none",
+}
+
+
+@pytest.mark.xfail(strict=True, reason="see DIFFERING")
+@pytest.mark.parametrize("name", sorted(DIFFERING))
+def test_known_chunking_differences(name: str) -> None:
+    path = ROOT / "rules" / "classic" / f"{name}.soar"
+    kernel, ours = kernel_runs(path)[0], our_runs(path)[0]
+    assert (ours.decisions, ours.firings) == (kernel.decisions, kernel.firings)
+    assert sorted(ours.chunks) == sorted(kernel.chunks)
+    for name_, production in kernel.chunks.items():
+        assert same_chunk(production, ours.chunks[name_])
+
+
+def _learning_lines(text: str) -> list[str]:
+    return [line for line in text.splitlines()
+            if line.startswith(("Learning new rule", "Ignoring "))]
+
+
+def test_learning_trace_as_the_kernel_prints_it() -> None:
+    """``trace --learning print``: each rule learned, and each duplicate refused, by name."""
+    path = ROOT / "rules" / "classic" / "arithmetic.soar"
+    with KernelAgent() as ka:
+        for line in BEFORE:
+            ka.cmd(line)
+        ka.cmd(f"source {{{path}}}")
+        ka.cmd("trace --learning print")
+        ka.take_log()
+        ka.cmd(f"run {DECISIONS}")
+        theirs = _learning_lines(ka.take_log())
+    out = io.StringIO()
+    agent = Agent(out=out)
+    for line in BEFORE:
+        agent.load(line)
+    agent.source(path)
+    agent.load("trace --learning print")
+    agent.run(DECISIONS)
+    ours = _learning_lines(out.getvalue())
+    assert any(line.startswith("Ignoring ") for line in theirs)
+    assert ours == theirs

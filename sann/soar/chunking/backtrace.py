@@ -132,6 +132,11 @@ def _step(agent: Agent, ex: Explanation, inst: Instantiation, queue: list[Step])
     if match is None:
         raise NotExplained(f"{inst.name} is not a rule firing")
     production: Production = match.production  # type: ignore[attr-defined]
+    info = agent._productions.get(production.name)
+    if info is not None and len(info.production.conditions) == len(production.conditions):
+        # the rule as written: the matcher's copy has relational tests moved where the
+        # kernel's Rete runs them (`reorder.with_kernel_relations`), which chunks do not show
+        production = info.production
     bindings = dict(match.bindings)  # type: ignore[attr-defined]
     actions = _align(production, inst, bindings)
     step = Step(len(ex.steps), inst, production, bindings, actions,
@@ -304,10 +309,16 @@ def _local(agent: Agent, ex: Explanation, step: Step, cond: Condition, wme: WME,
             ex.ids.union(("state", wme.value), keys[2])
         return
     source = sources[0]
-    if _match_of(agent, source) is None:
-        return
     pref = _pref_of(source, wme)
-    if pref is None:
+    if (pref is None or not pref.live) and agent._wm.get(wme.timetag) is wme:
+        # its preference went while another kept the WME: the kernel moves the WME's
+        # preference to that one, for the firings matched after the move (measured in
+        # soar_sml: a count rewritten to the same value by a function is backtraced through
+        # the function, and its arguments literalized, by the rules that tested it later)
+        moved = _moved_support(agent, wme, step)
+        if moved is not None:
+            source, pref = moved
+    if pref is None or _match_of(agent, source) is None:
         return
     maker = _step(agent, ex, source, queue)
     action = maker.actions.get(id(pref))
@@ -332,6 +343,23 @@ def _selection_knowledge(agent: Agent, ex: Explanation, wme: WME, queue: list[St
     for inst in agent.chunker.selection.get(wme, ()):
         if _match_of(agent, inst) is not None:
             _step(agent, ex, inst, queue)
+
+
+def _moved_support(agent: Agent, wme: WME, step: Step) -> tuple[Instantiation, Preference] | None:
+    """The live preference that holds ``wme`` now, when its instantiation fired before
+    ``step`` matched (its newest WME is older than the step's newest)."""
+    newest = max((w.timetag for w in step.wmes if w is not None), default=0)
+    for other in agent._current_supports(wme):
+        if other is step.inst:
+            continue
+        match = _match_of(agent, other)
+        found = _pref_of(other, wme)
+        if match is None or found is None or not found.live:
+            continue
+        if max((w.timetag for w in match.wmes if w is not None),  # type: ignore[attr-defined]
+               default=0) < newest:
+            return other, found
+    return None
 
 
 def _field_key(ex: Explanation, step: Step, test: Test, tag: str) -> Hashable:

@@ -144,7 +144,7 @@ def build_chunk(ex: Explanation, name: str) -> Production:
         if key not in seen:
             seen.add(key)
             conditions.append(negation)
-    conditions.sort(key=lambda c: 0 if isinstance(c, Condition) and c.goal else 1)
+    conditions = _join_order(list(dict.fromkeys(conditions)))  # equal ones once
     actions = [_action(vz, action, step) for _, action, step in ex.results]
     production = Production(name, tuple(conditions), tuple(actions), flags=("chunk",))
     production = check_production(production, FUNCTIONS.keys())
@@ -152,6 +152,33 @@ def build_chunk(ex: Explanation, name: str) -> Production:
     if problems:  # a warning for a rule: a chunk is refused (a justification stands in)
         raise SoarSemanticError(name, problems[0])
     return production
+
+
+def _join_order(conditions: list[ConditionElement]) -> list[ConditionElement]:
+    """The conditions in an order our matcher joins well (it joins them as written): the
+    state first, then always a condition on a bound identifier, those whose value is bound
+    or constant first; negations last. (The kernel reorders a chunk's conditions too, by
+    its own cost; the order means nothing else.)"""
+    positive = [c for c in conditions if isinstance(c, Condition) and not c.negated]
+    rest = [c for c in conditions if not (isinstance(c, Condition) and not c.negated)]
+    ordered: list[ConditionElement] = []
+    bound: set[str] = set()
+    while positive:
+        def cost(cond: Condition) -> tuple[int, int, int]:
+            ident = equality_var(cond.id_test)
+            reached = ident in bound or (not bound and cond.goal == "state")
+            value = _equality(cond.value_test)
+            known = isinstance(value, Const) or (isinstance(value, Var) and value.name in bound)
+            return (0 if reached else 1, 0 if known else 1,
+                    0 if isinstance(cond.attr_test, Const) else 1)
+        best = min(positive, key=cost)
+        positive.remove(best)
+        ordered.append(best)
+        for field in FIELDS:
+            var = _equality(getattr(best, field))
+            if isinstance(var, Var):
+                bound.add(var.name)
+    return ordered + rest
 
 
 def _match_goal(grounds: list[Ground]) -> Identifier | None:
@@ -297,6 +324,12 @@ def _negation(vz: Variablizer, element: Condition | ConjunctiveNegation,
         return ConjunctiveNegation(tuple(_negation(vz, inner, step)  # type: ignore[misc]
                                          for inner in element.conditions))
     tests = [vz.test(getattr(element, field), step, lhs=False) for field in FIELDS]
+    for k, test in enumerate(tests):
+        if _equality(test) is None:  # a variable, as the kernel's parser gives it
+            hint = str(tests[1].value) if isinstance(tests[1], Const) else "v"
+            local = vz.name(("fresh", vz.scope, id(element), k), hint)
+            vz.locals.add(local)
+            tests[k] = _conjoin([Var(local), test])
     is_state = vz.is_goal(step.bindings.get(equality_var(element.id_test) or ""), tests[0])
     return Condition(tests[0], tests[1], tests[2], element.negated, element.acceptable,
                      "state" if is_state else None)

@@ -20,6 +20,7 @@ from ..decision.matches import _queue_matches
 from ..decision.results import _make_justification
 from ..errors import SoarError
 from ..preferences import REQUIRE
+from ..printer import format_production
 from ..production import Production, duplicate_key, same_production
 from .backtrace import SELECTION, Explanation, NotExplained, explain
 from .build import build_chunk
@@ -85,6 +86,8 @@ class Chunker:
     #: the instantiations of the preferences that chose each substate operator
     selection: dict[WME, list[Instantiation]] = field(default_factory=dict)
     selection_limit: int = 1024
+    #: ``trace --learning noprint|print|fullprint``: the learned rules' names, or their text
+    trace: str = "noprint"
 
     def selected(self, agent: Agent, wme: WME, slot: Slot) -> None:
         """A substate's operator was selected: note the preferences that chose it, what
@@ -148,8 +151,15 @@ class Chunker:
         except SoarError as error:
             self._fail(agent, f"{name}: {error}")
             return None
-        if self._duplicate(agent, production):
+        if self.trace != "noprint":
+            agent._emit_line(f"Learning new rule {name}\n")
+            if self.trace == "fullprint":
+                agent._emit(format_production(production) + "\n")
+        other = self._duplicate(agent, production)
+        if other is not None:
             self.stats.duplicates += 1
+            if self.trace != "noprint":  # the kernel's line, trailing space included
+                agent._emit_line(f"Ignoring {name} because it is a duplicate of {other} \n")
             return None
         return production
 
@@ -210,11 +220,12 @@ class Chunker:
         return False
 
     @staticmethod
-    def _duplicate(agent: Agent, production: Production) -> bool:
+    def _duplicate(agent: Agent, production: Production) -> str | None:
+        """The rule the chunk would duplicate (the kernel keeps that one), if any."""
         for other in agent._by_shape.get(duplicate_key(production), ()):
             if same_production(agent._productions[other].production, production):
-                return True
-        return False
+                return other
+        return None
 
     @staticmethod
     def _add(agent: Agent, production: Production, grounds: set[int]) -> object | None:
