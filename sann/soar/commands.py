@@ -12,8 +12,9 @@ import itertools
 import math
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
+from .chunking.learn import Chunker
 from .decision.preference_semantics import POLICIES
 from .errors import SoarRuntimeError
 from .production import Command, SourceLocation
@@ -150,7 +151,8 @@ def _watch(agent: Agent, args: tuple[str, ...], base: Path) -> None:
                 else min(agent.trace_level, flag_level - 1)
             )
         elif item in ("--learning", "-L") and items and items[0] in _LEARNING_TRACE:
-            agent.chunker.trace = items.pop(0)  # what is printed when a rule is learned
+            # what is printed when a rule is learned
+            cast(Chunker, agent.chunker).trace = items.pop(0)
         elif item in _TRACE_IGNORED:
             if items and items[0] in _TRACE_IGNORED_VALUES:
                 items.pop(0)

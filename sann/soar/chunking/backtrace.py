@@ -17,7 +17,7 @@ from collections.abc import Hashable, Iterator
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from ..decision.results import _item_proposal, _supporting_instantiations
+from ..decision.results import _current_supports, _item_proposal, _supporting_instantiations
 from ..memory import WME, Identifier, Symbol
 from ..preferences import (
     ACCEPTABLE,
@@ -349,7 +349,7 @@ def _moved_support(agent: Agent, wme: WME, step: Step) -> tuple[Instantiation, P
     """The live preference that holds ``wme`` now, when its instantiation fired before
     ``step`` matched (its newest WME is older than the step's newest)."""
     newest = max((w.timetag for w in step.wmes if w is not None), default=0)
-    for other in agent._current_supports(wme):
+    for other in _current_supports(agent, wme):
         if other is step.inst:
             continue
         match = _match_of(agent, other)

@@ -53,8 +53,9 @@ def _canonical(production: Production) -> tuple[Production, list[Constraint]]:
         if isinstance(cond, ConjunctiveNegation):
             cond = ConjunctiveNegation(tuple(sorted(cond.conditions, key=lambda x: repr(shape(x)))))
         elif isinstance(cond, Condition) and not cond.negated:
-            cond = Condition(*(_strip(getattr(cond, f), constraints) for f in
-                               ("id_test", "attr_test", "value_test")),
+            cond = Condition(_strip(cond.id_test, constraints),
+                             _strip(cond.attr_test, constraints),
+                             _strip(cond.value_test, constraints),
                              cond.negated, cond.acceptable, cond.goal)
         conditions.append(cond)
     return replace(production, conditions=tuple(conditions)), constraints
