@@ -39,7 +39,6 @@ from .blocks import FEATURE_NAMES, NAMES, SIDES, BlockWorldParams, Scene, featur
 
 ENGINES = ("sann", "soar_sml")
 DEFAULT_RULES = Path(__file__).resolve().parents[2] / "rules" / "blocks.soar"
-DEFAULT_CAP = 8
 DEFAULT_HORIZON = 8
 # Two blocks must overlap in height by more than this to block a finger (observed heights: the
 # true overlaps are multiples of 5, so 1 unit absorbs the sensor noise).
@@ -60,29 +59,33 @@ class PlanSequence(NamedTuple):
 
 @dataclass(frozen=True)
 class PlannerConfig:
-    """``cap``: most sequences per target; ``horizon``: largest T_o a plan may reach;
-    ``clearance``/``margin``: the gripper's finger width and pad margin (the defaults are
-    ``BlockWorldParams``'; :func:`sann.tasks.blocks.make_dataset` passes the dataset's)."""
+    """``horizon``: largest T_o a plan may reach; ``clearance``/``margin``/``z_tolerance``:
+    the gripper as the robot knows it (the defaults are ``BlockWorldParams``';
+    :func:`sann.tasks.blocks.make_dataset` passes the dataset's); ``seed``: the seed of the
+    agent's random generator (``srand``, before every run), which picks among operators the
+    search found equally good; the sequences do not depend on it, the trace does."""
 
     engine: str = "sann"
     rules: str | os.PathLike[str] = DEFAULT_RULES
-    cap: int = DEFAULT_CAP
     horizon: int = DEFAULT_HORIZON
     clearance: float = BlockWorldParams.gripper_finger_width
     margin: float = BlockWorldParams.finger_margin
-    targets_per_run: int | None = None  # None: the engine's best (all in ours, 3 in soar_sml)
+    z_tolerance: float = Z_TOLERANCE
+    seed: int = 0
+    targets_per_run: int | None = None  # None: every target of the scene in one run
 
     def __post_init__(self) -> None:
         if self.engine not in ENGINES:
             raise ValueError(f"engine must be one of {ENGINES}, got {self.engine!r}")
-        for name in ("cap", "horizon"):
+        for name in ("horizon", "seed"):
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
+            low = 1 if name == "horizon" else 0
+            if isinstance(value, bool) or not isinstance(value, int) or value < low:
+                raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
         tpr = self.targets_per_run
         if tpr is not None and (isinstance(tpr, bool) or not isinstance(tpr, int) or tpr < 1):
             raise ValueError(f"targets_per_run must be an integer >= 1 or None, got {tpr!r}")
-        for name in ("clearance", "margin"):
+        for name in ("clearance", "margin", "z_tolerance"):
             value = getattr(self, name)
             if not (isinstance(value, int | float) and not isinstance(value, bool)
                     and math.isfinite(value) and value >= 0):
@@ -90,13 +93,16 @@ class PlannerConfig:
         if not Path(self.rules).is_file():
             raise ValueError(f"rules file not found: {self.rules}")
 
+    def gripper(self) -> list[tuple[str, float]]:
+        """The ``^gripper`` object of the input-link."""
+        return [("clearance", float(self.clearance)), ("margin", float(self.margin)),
+                ("z-tolerance", float(self.z_tolerance))]
 
-def _block_rows(feats: np.ndarray, clearance: float, margin: float) -> list[tuple]:
+
+def _block_rows(feats: np.ndarray) -> list[tuple]:
     """(id, name, size, x, y, z, [(side, neighbour id) ...], [(attribute, value) ...]) per
-    feature row. The attributes are the observed box's faces (centre -/+ size/2) and the bounds
-    of its finger slabs (faces -/+ ``clearance``; the pad: the faces shrunk by ``margin``; the
-    height range shrunk by ``Z_TOLERANCE``), computed here once per block so that the rules
-    compare pairs of blocks with predicates only."""
+    feature row: the row as the networks see it (the attributes are its distance and colour);
+    the rules derive the boxes and finger slabs themselves."""
     feats = np.asarray(feats, dtype=np.float64)
     if feats.ndim != 2 or feats.shape[1] != len(FEATURE_NAMES):
         raise ValueError(f"features must be an (n, {len(FEATURE_NAMES)}) array, "
@@ -107,24 +113,10 @@ def _block_rows(feats: np.ndarray, clearance: float, margin: float) -> list[tupl
         if not 1 <= bid <= len(NAMES):
             raise ValueError(f"block id {bid} is not in 1..{len(NAMES)}")
         rel = [(side, int(f[c])) for side, c in zip(SIDES, _SIDE_COLS, strict=True) if f[c]]
-        size = int(f[_COL["Size"]])
-        rows.append((bid, NAMES[bid - 1], size, float(f[0]), float(f[1]), float(f[2]), rel,
-                     _geometry(f[:3], size, clearance, margin)))
+        rest = [("distance", float(f[_COL["Distance"]])), ("color", int(f[_COL["Color"]]))]
+        rows.append((bid, NAMES[bid - 1], int(f[_COL["Size"]]), float(f[0]), float(f[1]),
+                     float(f[2]), rel, rest))
     return rows
-
-
-def _geometry(centre: np.ndarray, size: int, clearance: float, margin: float
-              ) -> list[tuple[str, float]]:
-    """The input-link geometry of one block (see the rule file's header)."""
-    lo, hi = centre - size / 2, centre + size / 2
-    out = [(f"{axis}{end}", float(v)) for k, axis in enumerate("xyz")
-           for end, v in (("min", lo[k]), ("max", hi[k]))]
-    for k, axis in enumerate("xy"):
-        out += [(f"{axis}slab-lo", float(lo[k] - clearance)),
-                (f"{axis}slab-hi", float(hi[k] + clearance)),
-                (f"{axis}pad-lo", float(lo[k] + margin)),
-                (f"{axis}pad-hi", float(hi[k] - margin))]
-    return out + [("zin-lo", float(lo[2] + Z_TOLERANCE)), ("zin-hi", float(hi[2] - Z_TOLERANCE))]
 
 
 class _SannBackend:
@@ -149,11 +141,14 @@ class _SannBackend:
         self.transcript.truncate()
         errors = len(agent.errors)
         il = agent.input_link
-        il.add("cap", config.cap)
+        agent.srand(config.seed)
         il.add("horizon", config.horizon)
+        g = il.add("gripper")
+        for attr, value in config.gripper():
+            g.add(attr, value)
         for t in targets:
             il.add("target", int(t))
-        for bid, name, size, x, y, z, rel, faces in rows:
+        for bid, name, size, x, y, z, rel, rest in rows:
             b = il.add("block")
             b.add("id", bid)
             b.add("name", name)
@@ -163,8 +158,8 @@ class _SannBackend:
             b.add("z", z)
             for side, other in rel:
                 b.add(side, other)
-            for face, value in faces:
-                b.add(face, value)
+            for attr, value in rest:
+                b.add(attr, value)
         agent.run()
         if len(agent.errors) > errors:
             raise RuntimeError("the planning rules failed: " + "; ".join(agent.errors[errors:]))
@@ -184,16 +179,19 @@ class _SmlBackend(SmlAgent):
     """The real Soar kernel through soar_sml: the scene stays on the input-link while groups of
     targets are planned; ``init-soar`` between groups (SML re-sends the input-link)."""
 
-    default_group = 3
+    default_group = 26
 
     def __init__(self, rules: Path) -> None:
         super().__init__(rules, "blocks")
 
     def put_scene(self, rows: list[tuple], config: PlannerConfig) -> list:
         a, il = self.agent, self.agent.GetInputLink()
-        top = [a.CreateIntWME(il, "cap", config.cap),
-               a.CreateIntWME(il, "horizon", config.horizon)]
-        for bid, name, size, x, y, z, rel, faces in rows:
+        self.seed = config.seed
+        g = a.CreateIdWME(il, "gripper")
+        top = [a.CreateIntWME(il, "horizon", config.horizon), g]
+        for attr, value in config.gripper():
+            a.CreateFloatWME(g, attr, value)
+        for bid, name, size, x, y, z, rel, rest in rows:
             b = a.CreateIdWME(il, "block")
             top.append(b)
             a.CreateIntWME(b, "id", bid)
@@ -204,8 +202,8 @@ class _SmlBackend(SmlAgent):
             a.CreateFloatWME(b, "z", z)
             for side, other in rel:
                 a.CreateIntWME(b, side, other)
-            for face, value in faces:
-                a.CreateFloatWME(b, face, value)
+            for attr, value in rest:
+                (a.CreateIntWME if isinstance(value, int) else a.CreateFloatWME)(b, attr, value)
         return top
 
     def run_group(self, targets: Sequence[int]) -> list[PlanSequence]:
@@ -213,6 +211,7 @@ class _SmlBackend(SmlAgent):
         il = a.GetInputLink()
         wmes = [a.CreateIntWME(il, "target", int(t)) for t in targets]
         a.Commit()
+        a.ExecuteCommandLine(f"srand {self.seed}")
         a.RunSelf(100_000)
         out = [PlanSequence(int(t), pair, int(t_o), order) for t, pair, t_o, order
                in self.output_sequences(("target", "pair", "t-o", "order"))]
@@ -244,7 +243,7 @@ class Planner:
 
     def plan(self, feats: np.ndarray, targets: Iterable[int] | None = None
              ) -> dict[int, list[PlanSequence]]:
-        rows = _block_rows(feats, self.config.clearance, self.config.margin)
+        rows = _block_rows(feats)
         ids = [r[0] for r in rows]
         if len(set(ids)) != len(ids):
             raise ValueError("block ids in a scene must be unique")
@@ -290,8 +289,8 @@ def plan_scene(
     targets: Iterable[int] | None = None,
     engine: str = "sann",
     rules: str | os.PathLike[str] = DEFAULT_RULES,
-    cap: int = DEFAULT_CAP,
     horizon: int = DEFAULT_HORIZON,
+    seed: int = 0,
 ) -> dict[int, list[PlanSequence]]:
     """Plan one scene: ``{target id: sequences}``.
 
@@ -299,7 +298,7 @@ def plan_scene(
     Table-1 feature rows. ``targets``: block ids, default every block.
     """
     feats = features(scene) if isinstance(scene, Scene) else np.asarray(scene)
-    with Planner(PlannerConfig(engine=engine, rules=rules, cap=cap, horizon=horizon)) as p:
+    with Planner(PlannerConfig(engine=engine, rules=rules, horizon=horizon, seed=seed)) as p:
         return p.plan(feats, targets)
 
 
