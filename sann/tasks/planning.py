@@ -26,6 +26,7 @@ from __future__ import annotations
 import io
 import math
 import os
+import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -99,6 +100,16 @@ class PlannerConfig:
                 ("z-tolerance", float(self.z_tolerance))]
 
 
+def parse_sequence(text: str) -> PlanSequence:
+    """A plan as the rules write it on the output-link, ``target:pair:T_o:order``."""
+    try:
+        target, pair, t_o, order = text.split(":")
+        return PlanSequence(int(target), pair, int(t_o), order)
+    except ValueError:
+        raise ValueError(f"not a plan of rules/blocks.soar (target:pair:T_o:order): "
+                         f"{text!r}") from None
+
+
 def _block_rows(feats: np.ndarray) -> list[tuple]:
     """(id, name, size, x, y, z, [(side, neighbour id) ...], [(attribute, value) ...]) per
     feature row: the row as the networks see it (the attributes are its distance and colour);
@@ -164,12 +175,8 @@ class _SannBackend:
         if len(agent.errors) > errors:
             raise RuntimeError("the planning rules failed: " + "; ".join(agent.errors[errors:]))
         out = []
-        for attr, q in agent.output_link.children():
-            if attr == "sequence":
-                kv = dict(q.children())
-                out.append(PlanSequence(int(kv["target"]), str(kv["pair"]), int(kv["t-o"]),
-                                        str(kv["order"])))
-        return out
+        return [parse_sequence(str(value)) for attr, value in agent.output_link.children()
+                if attr == "sequence"]
 
     def close(self) -> None:
         self.agent = None
@@ -213,8 +220,10 @@ class _SmlBackend(SmlAgent):
         a.Commit()
         a.ExecuteCommandLine(f"srand {self.seed}")
         a.RunSelf(100_000)
-        out = [PlanSequence(int(t), pair, int(t_o), order) for t, pair, t_o, order
-               in self.output_sequences(("target", "pair", "t-o", "order"))]
+        ol = a.GetOutputLink()
+        children = [] if ol is None else [ol.GetChild(i) for i in range(ol.GetNumberChildren())]
+        out = [parse_sequence(c.GetValueAsString()) for c in children
+               if c.GetAttribute() == "sequence"]
         for w in wmes:
             a.DestroyWME(w)
         a.ExecuteCommandLine("init-soar")
@@ -265,6 +274,33 @@ class Planner:
         for seq in found:
             result[seq.target].append(seq)
         return {t: sorted(v, key=lambda s: (s.pair, s.t_o, s.order)) for t, v in result.items()}
+
+    def traced(self, feats: np.ndarray, targets: Iterable[int] | None = None, level: int = 1
+               ) -> tuple[dict[int, list[PlanSequence]], str]:
+        """Plan one scene as :meth:`plan` does, with the engine's trace at watch ``level``
+        (1: decisions -- operators, impasses, substates): ``(plans, trace text)``."""
+        if isinstance(self._backend, _SannBackend):
+            agent = self.agent
+            agent.trace(level)
+            try:
+                plans = self.plan(feats, targets)
+            finally:
+                agent.trace(0)
+            return plans, self._backend.transcript.getvalue()
+        import soar_sml
+
+        log: list[str] = []
+        kernel_agent = self._backend.agent
+        handler = kernel_agent.RegisterForPrintEvent(
+            soar_sml.smlEVENT_PRINT, lambda _mid, _ud, _ag, msg: log.append(msg), None)
+        kernel_agent.ExecuteCommandLine(f"watch {level}")
+        try:
+            plans = self.plan(feats, targets)
+        finally:
+            kernel_agent.ExecuteCommandLine("watch 0")
+            kernel_agent.UnregisterForPrintEvent(handler)
+        # the init-soar that follows each run traces the new top state: not part of the plan
+        return plans, re.sub(r"\n +0: ==>S: S1 ?", "", "".join(log))
 
     @property
     def agent(self):  # -> sann.soar.Agent (imported lazily, as the backend does)
