@@ -174,7 +174,6 @@ class _SannBackend:
         agent.run()
         if len(agent.errors) > errors:
             raise RuntimeError("the planning rules failed: " + "; ".join(agent.errors[errors:]))
-        out = []
         return [parse_sequence(str(value)) for attr, value in agent.output_link.children()
                 if attr == "sequence"]
 
