@@ -17,8 +17,9 @@ same test samples:
   margin along the face, over the target's height range shrunk by the z tolerance). That is
   the information the rules get — every block's feature row (observed centre and size, hence
   its box, and the neighbour ids) and the gripper's clearance — turned into the one-step test
-  the rules apply before they search. If SANN beats the ANN but not this control, what helped was the extra scene-level
-  input, not the planning (the sequences, their search, the eq.-3 weights).
+  the rules apply before they search. If SANN beats the ANN but not this control, what helped
+  was the extra scene-level input, not the planning (the sequences, their search, the eq.-3
+  weights).
 
 Intervals. The test samples of one scene are not independent (D1 has about 14 per scene), so
 every interval is a percentile bootstrap that resamples, in each replicate, the data seeds,

@@ -6,19 +6,24 @@ runs until it halts, and the sequences are read back from the output-link. The i
 schema is documented at the top of the rule file.
 
 What the rules see is what the networks see, but for the whole scene at once: the Table-1
-feature rows of every block (observed positions, size, id and the six noisy neighbour ids),
-with each block's observed box faces (``^xmin .. ^zmax``, centre -/+ size/2) and its finger
-slabs for the gripper's ``clearance`` and ``margin`` (computed here from the same rows); they
-never see the true geometry. From them the rules derive side blockage for the gripper's
-clearance, which is wider than the sensor's neighbour gap: a block 3 units beside another has
-neighbour feature 0 there, yet the fingers do not fit (see the rule file's header).
+feature rows of every block (observed centre, distance, size, colour, id and the six noisy
+neighbour ids), and the gripper's dimensions (``clearance``, ``margin``, ``z_tolerance``). The
+rules compute the blocks' boxes and finger slabs from these themselves; nothing computed from
+the true geometry or by the labeller reaches them. From them the rules derive side blockage
+for the gripper's clearance, which is wider than the sensor's neighbour gap: a block 3 units
+beside another has neighbour feature 0 there, yet the fingers do not fit (see the rule file's
+header).
+
+The plans are what Soar's search finds (operators per candidate grasp, preferences, tie
+impasses searched by the selection space); the output-link holds each distinct plan once, as
+``target:pair:T_o:order`` (:func:`parse_sequence`). Where the search found grasps equally good
+the agent picks one at random: ``PlannerConfig.seed`` seeds it (``srand``) before every run,
+so traces repeat; the plans found do not depend on the pick.
 
 Speed. One agent is reused across scenes; between runs its working memory is reset with
-``init-soar`` (``agent.init()`` in ours). Plans of different targets never interact, so the
-targets of a scene can be planned in one run or in several: the sequences are the same. The
-real kernel gets slower than linearly with the number of live plans in one run (its P-node
-bookkeeping scans a production's pending matches), so the driver plans a few targets per run
-there (``targets_per_run``; the scene stays on the input-link meanwhile).
+``init-soar`` (``agent.init()`` in ours). The targets are planned one after another in one
+run (each in its own substate), so planning them in one run or in several gives the same
+sequences (``targets_per_run``; the scene stays on the input-link meanwhile in the kernel).
 """
 
 from __future__ import annotations
