@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -288,3 +290,35 @@ def test_planning_prints_nothing_and_keeps_the_transcript(
         transcript = planner._backend.transcript.getvalue()
     assert capfd.readouterr().out == ""
     assert "System halted." in transcript
+
+
+def _shape(trace: str) -> str:
+    """A watch-1 trace without the numbers of its identifiers."""
+    return re.sub(r"\b([OSC])\d+\b", r"\1", trace)
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "measured: at decision 31 the kernel opens a state no-change below the evaluation state "
+    "S6 (a dead end, scored failure) where ours has scored S6 with the numeric value 6 and "
+    "evaluates the other tied grasp; the plans found are the same"))
+def test_the_search_of_one_c3_scene_differs_in_one_evaluation() -> None:
+    _sml_or_skip()
+    feats = observe_scene(generate_scene("C3", 13, 9), 9).features
+    with Planner(engine="sann") as ours, Planner(engine="soar_sml") as kernel:
+        ours_plans, ours_trace = ours.traced(feats)
+        kernel_plans, kernel_trace = kernel.traced(feats)
+    assert ours_plans == kernel_plans
+    assert _shape(ours_trace) == _shape(kernel_trace)
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "measured: the same decisions, but the kernel numbers the grasp operator chosen after the "
+    "tie of target W O20 where ours numbers it O19 (proposals of one wave made in another "
+    "order)"))
+def test_one_trace_numbers_two_operators_the_other_way() -> None:
+    _sml_or_skip()
+    feats = features(generate_scene("C3", 10, 4))
+    with Planner(engine="sann") as ours, Planner(engine="soar_sml") as kernel:
+        ours_trace, kernel_trace = ours.traced(feats, [23])[1], kernel.traced(feats, [23])[1]
+    assert _shape(ours_trace) == _shape(kernel_trace)
+    assert ours_trace == kernel_trace
