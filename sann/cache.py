@@ -23,6 +23,7 @@ import hashlib
 import io
 import json
 import os
+import re
 import tempfile
 import time
 import zipfile
@@ -51,9 +52,32 @@ def file_sha256(path: str | os.PathLike[str]) -> str:
 def soar_code_sha256(path: str | os.PathLike[str]) -> str:
     """Hex SHA-256 of a Soar file's text with its comments removed (a ``#`` outside ``|...|``
     and ``"..."`` up to the end of its line: grammars/soar.lark ignores exactly these, and no
-    other token may hold a ``#``). Datasets are keyed on it, so that editing the comments of a
-    rule file, which cannot change a plan, does not plan every scene again."""
-    text = Path(path).read_text(encoding="utf-8")
+    other token may hold a ``#``), followed by the code of every file it ``source``s (a path
+    relative to the sourcing file's directory, as Soar reads it), recursively. Datasets are
+    keyed on it, so that editing the comments of a rule file, which cannot change a plan, does
+    not plan every scene again, while editing a sourced rule file (rules/blocks.soar sources
+    the selection space) does."""
+    return hashlib.sha256(_soar_code_tree(Path(path), set()).encode()).hexdigest()
+
+
+_SOURCE = re.compile(r"^[ \t]*source[ \t]+(\{[^}\n]*\}|\S+)", re.MULTILINE)
+
+
+def _soar_code_tree(path: Path, seen: set[Path]) -> str:
+    """The code of ``path`` and of the files it sources (each file once)."""
+    path = path.resolve()
+    seen.add(path)
+    code = _soar_code(path.read_text(encoding="utf-8"))
+    parts = [code]
+    for match in _SOURCE.finditer(code):
+        target = path.parent / match.group(1).strip("{}").strip()
+        if target.resolve() not in seen:
+            parts.append(_soar_code_tree(target, seen))
+    return "\n".join(parts)
+
+
+def _soar_code(text: str) -> str:
+    """``text`` without its comments."""
     code: list[str] = []
     quote = ""
     i = 0
@@ -72,7 +96,7 @@ def soar_code_sha256(path: str | os.PathLike[str]) -> str:
             quote = c
         code.append(c)
         i += 1
-    return hashlib.sha256("".join(code).encode()).hexdigest()
+    return "".join(code)
 
 
 def make_key(description: dict) -> str:

@@ -110,6 +110,21 @@ def test_soar_code_hash_ignores_comments_only(tmp_path: Path) -> None:
         "sp {a (state <s>) --> (<s> ^x |a\\|#c|)}\n")
 
 
+def test_the_code_hash_covers_the_files_a_rule_file_sources(tmp_path: Path) -> None:
+    """rules/blocks.soar sources the selection space: editing it must miss the dataset cache,
+    editing its comments must not."""
+    (tmp_path / "lib").mkdir()
+    lib = tmp_path / "lib" / "space.soar"
+    main = tmp_path / "main.soar"
+    main.write_text("source lib/space.soar\nsp {a (state <s>) --> (<s> ^x 1)}\n")
+    lib.write_text("sp {b (state <s>) --> (<s> ^y 1)}  # a note\n")
+    base = cache.soar_code_sha256(main)
+    lib.write_text("sp {b (state <s>) --> (<s> ^y 1)}  # another note\n")
+    assert cache.soar_code_sha256(main) == base
+    lib.write_text("sp {b (state <s>) --> (<s> ^y 2)}\n")
+    assert cache.soar_code_sha256(main) != base
+
+
 def test_a_comment_on_every_line_leaves_the_productions_and_the_hash(tmp_path: Path) -> None:
     """What soar_code_sha256 relies on: our parser reads the shipped rules with a comment added
     at the end of every line (outside quotes) as the same productions."""
@@ -122,11 +137,15 @@ def test_a_comment_on_every_line_leaves_the_productions_and_the_hash(tmp_path: P
         return [format_production(info.production) for info in agent._productions.values()]
 
     root = Path(__file__).resolve().parents[1] / "rules"
-    for path in sorted(root.glob("*.soar")):
-        commented = tmp_path / path.name
+    paths = sorted(root.glob("*.soar")) + sorted(root.glob("default/*.soar"))
+    for path in paths:  # the sourced files first, so that a commented file sources them
+        commented = tmp_path / path.relative_to(root)
+        commented.parent.mkdir(exist_ok=True)
         commented.write_text("\n".join(
             line if "|" in line or '"' in line or line.endswith("\\") else line + "# added"
             for line in path.read_text().split("\n")))
+    for path in paths:
+        commented = tmp_path / path.relative_to(root)
         assert productions(commented) == productions(path), path.name
         assert cache.soar_code_sha256(commented) == cache.soar_code_sha256(path), path.name
 

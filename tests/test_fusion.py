@@ -39,9 +39,9 @@ def test_fusion_on_hand_built_scene() -> None:
     scene = scene_from_blocks(ROW)
     t_o = t_o_lists(plan_scene(scene))
     col = logical_column([t_o[int(i)] for i in scene.ids])
-    # A, D, E free on both pairs: 2; B: x needs D then C (1/4) + y free (1);
-    # C: D comes off, then B along x (1/4) or nothing more along y (1/2)
-    assert col.tolist() == [2.0, 1.25, 0.75, 2.0, 2.0]
+    # A, D, E free on both pairs: 2 (the tie keeps both grasps); B free along y: grasped at
+    # once, nothing else searched (1); C: D comes off, then C is free along y (1/2)
+    assert col.tolist() == [2.0, 1.0, 0.5, 2.0, 2.0]
     fused = fuse(features(scene), col)
     assert fused.shape == (5, 14)
     assert np.array_equal(fused[:, :13], features(scene))

@@ -32,7 +32,7 @@ def test_a_runaway_run_stops_at_the_limit() -> None:
 
 
 def test_a_fragment_runs_inside_its_file_and_errors_count_from_the_cell() -> None:
-    start = BLOCKS.index("sp {", BLOCKS.index("relations between blocks"))
+    start = BLOCKS.index("sp {", BLOCKS.index("the scene, once"))
     fragment = BLOCKS[start:BLOCKS.index("\n\n", start) + 1]
     cell = live.Cell(text=fragment, file="blocks.soar", shipped=fragment)
     text, first = live.compose(cell)

@@ -15,10 +15,11 @@ same test samples:
   no block on it (no Up neighbour, no block listing it as Down) and one of its side pairs has
   no other block's observed box in its finger slabs (the gripper's clearance, less the pad's
   margin along the face, over the target's height range shrunk by the z tolerance). That is
-  the information the rules are handed — every block's observed box and the neighbour ids,
-  with the gripper's clearance — turned into the one-step test the rules apply before they
-  plan. If SANN beats the ANN but not this control, what helped was the extra scene-level
-  input, not the planning (the sequences, their search, the eq.-3 weights).
+  the information the rules get — every block's feature row (observed centre and size, hence
+  its box, and the neighbour ids) and the gripper's clearance — turned into the one-step test
+  the rules apply before they search. If SANN beats the ANN but not this control, what helped
+  was the extra scene-level input, not the planning (the sequences, their search, the eq.-3
+  weights).
 
 Intervals. The test samples of one scene are not independent (D1 has about 14 per scene), so
 every interval is a percentile bootstrap that resamples, in each replicate, the data seeds,

@@ -577,7 +577,7 @@ def observe_scene(scene: Scene, rng: np.random.Generator | int | None,
 
 # --------------------------------------------------------------------------- datasets
 
-DATASET_VERSION = "blocks-dataset-3"  # bump when generation, features or labels change
+DATASET_VERSION = "blocks-dataset-4"  # bump when generation, features or labels change
 KINDS = ("D1", "D2")
 _SPLITS = ("train", "test")
 
@@ -804,7 +804,6 @@ def make_dataset(
     engine: str = "sann",
     rules: str | os.PathLike[str] | None = None,
     progress: bool = False,
-    cap: int | None = None,
     horizon: int | None = None,
     use_cache: bool = True,
     workers: int | None = 1,
@@ -817,10 +816,10 @@ def make_dataset(
     it), plus the sha256 of the rule file's code (``sann.cache.soar_code_sha256``: comments do
     not count) and ``DATASET_VERSION``. ``workers`` processes plan the
     scenes (None: one per CPU core); every scene has its own seed, so the arrays do not depend
-    on it. ``cap``/``horizon`` default to the planner's (8 sequences, T_o <= 8).
+    on it. ``horizon`` defaults to the planner's (T_o <= 8).
     """
     from sann import cache
-    from sann.tasks.planning import DEFAULT_CAP, DEFAULT_HORIZON, DEFAULT_RULES, PlannerConfig
+    from sann.tasks.planning import DEFAULT_HORIZON, DEFAULT_RULES, PlannerConfig
 
     if kind not in KINDS:
         raise ValueError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}")
@@ -832,15 +831,14 @@ def make_dataset(
     if not isinstance(params, BlockWorldParams):
         raise ValueError(f"params must be a BlockWorldParams, got {type(params).__name__}")
     config = PlannerConfig(engine=engine, rules=rules or DEFAULT_RULES,
-                           cap=DEFAULT_CAP if cap is None else cap,
                            horizon=DEFAULT_HORIZON if horizon is None else horizon,
                            clearance=float(params.gripper_finger_width),
                            margin=float(params.finger_margin))
     rules_code = cache.soar_code_sha256(config.rules)
     description = {
         "kind": kind, "mode": mode, "n_train": n_train, "n_test": n_test, "seed": int(seed),
-        "params": asdict(params), "rules_code_sha256": rules_code, "cap": config.cap,
-        "horizon": config.horizon, "version": DATASET_VERSION,
+        "params": asdict(params), "rules_code_sha256": rules_code,
+        "horizon": config.horizon, "z_tolerance": config.z_tolerance, "version": DATASET_VERSION,
     }
 
     n_workers = _check_workers(workers)

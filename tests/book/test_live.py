@@ -289,10 +289,10 @@ def test_edits_survive_a_reload_and_reset_restores(browser, served) -> None:
 
 def test_a_fragment_runs_in_its_file_on_the_chapter_scene(pages) -> None:
     page = pages("planning")
-    cell = page.cell(r"blocks\*propose\*init-plans")
+    cell = page.cell(r"blocks\*propose\*plan-target")
     assert "C3 scene" in cell.locator(".sann-live-bar").inner_text()
     output = run(cell)
-    assert "(init-plans)" in output and "(finish)" in output
+    assert "(plan-target)" in output and "(operator tie)" in output and "(finish)" in output
     assert "halted" in output
     cell.get_by_role("button", name="output-link", exact=True).click()
     cell.locator(".sann-live-query").first.wait_for(timeout=60_000)
