@@ -233,9 +233,10 @@ def draw_rete(graph: ReteGraph, new: list[TokenView] | None = None, added: WME |
         new_at[token.node] = new_at.get(token.node, 0) + 1
     places = _tree_places(graph)
     alpha_places = _alpha_places(graph, places)
-    width = max(x for x, _ in places.values()) + _DX
+    left = -1.25 * _DX - _BOX_W / 2 - 0.2
+    right = max(x for x, _ in places.values()) + _BOX_W / 2 + 0.2
     depth = -min(y for _, y in [*places.values(), *alpha_places.values()]) + _DY
-    figure, ax = plt.subplots(figsize=(1.55 * (width + 1.25 * _DX), 1.5 * depth + 0.6))
+    figure, ax = plt.subplots(figsize=(1.5 * (right - left), 1.5 * depth + 0.6))
     for name, node in graph.nodes.items():
         x, y = places[name]
         for child in node.children:
@@ -254,7 +255,7 @@ def draw_rete(graph: ReteGraph, new: list[TokenView] | None = None, added: WME |
         count = f"{len(alpha.wmes)} WME{'s' if len(alpha.wmes) != 1 else ''}"
         _box(ax, x, y, COLOURS["alpha"], f"{name}  alpha memory", alpha.pattern, count,
              entered)
-    ax.set_xlim(-1.25 * _DX - _BOX_W / 2 - 0.2, width)
+    ax.set_xlim(left, right)
     ax.set_ylim(-depth, _BOX_H)
     ax.set_aspect("equal")
     ax.axis("off")
