@@ -156,8 +156,10 @@ def _labels(order: list[Node]) -> tuple[dict[int, str], dict[int, list[str]]]:
         production = pnode.production
         labels[id(pnode)] = production.name
         below.setdefault(id(pnode), []).append(production.name)
-        node = pnode.parent
+        node: Node | None = pnode.parent
         for level in pnode.layout.levels:
+            if node is None:
+                raise AssertionError(f"{production.name}: more levels than nodes above it")
             text = "  ".join(format_condition(production.conditions[i]) for i in level)
             labels.setdefault(id(node), text)
             below.setdefault(id(node), []).append(production.name)
@@ -242,9 +244,9 @@ def draw_rete(graph: ReteGraph, new: list[TokenView] | None = None, added: WME |
         for child in node.children:
             _arrow(ax, (x, y - _BOX_H / 2), (places[child][0], places[child][1] + _BOX_H / 2),
                    dashed=False)
-        for alpha in node.alphas:
-            ax_, ay = alpha_places[alpha]
-            _arrow(ax, (ax_ + _BOX_W / 2, ay), (x - _BOX_W / 2, y), dashed=True)
+        for feeder in node.alphas:
+            fx, fy = alpha_places[feeder]
+            _arrow(ax, (fx + _BOX_W / 2, fy), (x - _BOX_W / 2, y), dashed=True)
         count = f"{len(node.tokens)} token{'s' if len(node.tokens) != 1 else ''}" + (
             f", {node.blocked} blocked" if node.blocked else "")
         _box(ax, x, y, COLOURS[node.kind], f"{name}  {node.kind}", node.label, count,
