@@ -278,3 +278,10 @@ class Rete:
 
     def productions(self) -> list[Production]:
         return list(self._productions.values())
+
+    def network(self) -> tuple[Node, list[AlphaMemory]]:
+        """The beta network's root and the alpha memories (oldest first), built up to date:
+        what a reader of the network's structure walks (``sann.viz.rete_graph`` draws it)."""
+        if self._pending:
+            self._flush()
+        return self._root, list(self._amems.values())
