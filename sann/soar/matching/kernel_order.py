@@ -210,7 +210,8 @@ class KernelOrder:
             stack.extend(node.children.values())
         for places in self._places.values():
             for index, place in list(places.items()):
-                places[index] = place._replace(born=0, loaded=0)
+                if place.born or place.loaded:  # after the first restart they are all 0
+                    places[index] = place._replace(born=0, loaded=0)
 
     def remove(self, name: str) -> None:
         self._places.pop(name, None)
