@@ -4,7 +4,8 @@ Every action of a fired rule is a *preference* for a value of an ``(identifier ^
 slot. Working memory is computed from the preferences of each slot, as in the Soar 9.6
 kernel: a non-operator slot holds every acceptable value that is not rejected; an operator
 slot of a state holds at most one *selected* value chosen by the decision procedure
-(`decide.py`), plus ``(S1 ^operator O1 +)`` acceptable-preference WMEs for its proposals.
+(`decision/preference_semantics.py`), plus ``(S1 ^operator O1 +)`` acceptable-preference
+WMEs for its proposals.
 
 Preference lists keep the kernel's order (new preferences go to the head of their list)
 because candidate order decides tie ``^item`` order and the ``first``/``last`` selection

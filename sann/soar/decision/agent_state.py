@@ -65,9 +65,14 @@ class JoinLink:
 class AgentState:
     """The decision cycle's data (see the module docstring)."""
 
-    # declared here: assigned first outside ``__init__`` (mypyc takes the first type)
+    # declared here: assigned first outside ``__init__`` (mypyc takes the first type), or
+    # by the functions that make the top state (``substates.ids_new_after_top``)
     _input_handle: InputHandle | None
     _traced_adds: list[WME]
+    _top: Goal
+    _io_id: Identifier
+    _input_link_id: Identifier
+    _output_link_id: Identifier
 
     def __init__(self, name: str, matcher_class: type, out: TextIO | None) -> None:
         self.name = name

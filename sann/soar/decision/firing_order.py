@@ -583,7 +583,7 @@ def _shared(firsts: list[tuple]) -> set[tuple]:
 def _token_creation_key(ranks: list[tuple | None], sign: int) -> tuple:
     """The order the kernel's Rete made tokens in, from the ``_entry_rank``s of their
     WMEs in its condition order (``sign`` 1: made first first; -1: the reverse), and of
-    the last unblocking of its negations (``Agent._prefix_ranks``; None: not known). A
+    the last unblocking of its negations (``_prefix_ranks``; None: not known). A
     token was made when its latest WME entered or its latest negation unblocked it: by a
     right activation that visited the parent's tokens latest made first (or a negative
     node passing the one token on), then by left activations down to here, each visiting
