@@ -26,12 +26,8 @@ import time
 
 import numpy as np
 
-from sann.tasks.blocks import (
-    BlockWorldParams,
-    _dataset_scene,
-    make_dataset,
-    observe_scene,
-)
+from sann.tasks.blocks import BlockWorldParams, make_dataset, observe_scene
+from sann.tasks.blocks.dataset import _dataset_scene
 
 TARGET_SECONDS = 60.0
 GOAL_SECONDS = 30.0

@@ -445,7 +445,7 @@ def evaluate_all(config: BlocksExperiment, progress: bool = False
     was parallel before, and training kept one core busy. Every scene and every net has its
     own seed, so the numbers do not depend on which process computed them."""
     from sann import cache
-    from sann.tasks.blocks import _check_workers
+    from sann.tasks.blocks.dataset import _check_workers
 
     found: dict[tuple[str, str, int], dict[str, np.ndarray]] = {}
     missing = []

@@ -41,7 +41,8 @@ import numpy as np
 from sann import RULES
 
 from .backends import InputItem, OutputValue, SannBackend, SmlBackend
-from .blocks import FEATURE_NAMES, NAMES, SIDES, BlockWorldParams, Scene, features
+from .blocks.features import features
+from .blocks.world import FEATURE_NAMES, NAMES, SIDES, BlockWorldParams, Scene
 
 ENGINES = ("sann", "soar_sml")
 DEFAULT_RULES = RULES / "blocks.soar"

@@ -10,7 +10,6 @@ from sann.tasks.blocks import (
     MODES,
     TABLE_SIZE,
     BlockWorldParams,
-    _pair_free,
     features,
     generate_scene,
     graspable,
@@ -19,6 +18,7 @@ from sann.tasks.blocks import (
     rests_on_matrix,
     scene_from_blocks,
 )
+from sann.tasks.blocks.world import _pair_free
 
 N_RANDOM = 150
 
