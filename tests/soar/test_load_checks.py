@@ -346,9 +346,22 @@ def test_learning_turned_off_later_in_the_file_runs() -> None:
     assert agent.halted
 
 
-@pytest.mark.parametrize("form", ["chunk always", "learn --on", "chunk only", "chunk on"])
-def test_running_with_learning_on_is_refused(form: str) -> None:
+#: A substate returns one result to the top state, then the top state halts.
+_RESULT_AGENT = """
+sp {propose (state <s> ^superstate nil -^done) --> (<s> ^operator <o> +) (<o> ^name go)}
+sp {result (state <s> ^superstate <ss>) (<ss> ^operator.name go) --> (<ss> ^done yes)}
+sp {stop (state <s> ^superstate nil ^done yes) --> (halt)}
+"""
+
+
+@pytest.mark.parametrize(("form", "chunks"), [
+    ("chunk always", 1), ("learn --on", 1), ("chunk on", 0), ("chunk only", 0)])
+def test_running_with_learning_on_learns_as_its_mode_says(form: str, chunks: int) -> None:
+    """Learning on, the run goes (this engine learns): the result is chunked, except under
+    ``chunk only`` (which ``chunk on`` means, in the 9.6 kernel) with no ``force-learn``."""
     agent = Agent()
-    agent.load(form)
-    with pytest.raises(SoarError, match="learning is on .* does not learn chunks"):
-        agent.run(1)
+    agent.load(form + "\n" + _RESULT_AGENT)
+    agent.run(10)
+    assert agent.halted
+    learned = [name for name in agent.productions if name.startswith("chunk")]
+    assert len(learned) == chunks, learned
