@@ -199,3 +199,73 @@ def test_learning_trace_as_the_kernel_prints_it() -> None:
     ours = _learning_lines(out.getvalue())
     assert any(line.startswith("Ignoring ") for line in theirs)
     assert ours == theirs
+
+
+def _operators_after_init(run: list[str], steps: int, kernel: bool) -> list[str]:
+    """The look-ahead water jug run ``steps`` decisions, then ``init-soar`` and run on: the
+    second run's decision lines and operator proposals (``+ (O9 ^name pour +)``), in order."""
+    path = ROOT / "rules" / "classic" / "water-jug-lookahead.soar"
+    commands = [*run, f"source {{{path}}}", f"run {steps}", "init-soar"]
+    if kernel:
+        with KernelAgent() as ka:
+            for line in commands:
+                ka.cmd(line)
+            ka.take_log()
+            ka.cmd("watch 5")
+            ka.cmd(f"run {DECISIONS}")
+            trace = ka.take_log()
+    else:
+        out = io.StringIO()
+        agent = Agent(out=out)
+        for line in commands:
+            agent.load(line)
+        out.seek(0)
+        out.truncate()
+        agent.load("watch 5")
+        agent.run(DECISIONS)
+        trace = out.getvalue()
+    return re.findall(r"^(?:\+ \(O\d+ \^name \S+|\s+\d+: .*)", trace, re.M)
+
+
+@pytest.mark.xfail(strict=True, reason="our firing order after init-soar is the fresh one")
+def test_firing_order_after_init_soar() -> None:
+    """The kernel's order of new matches changes after ``init-soar``; ours does not.
+
+    Found with the book's learning exercise (chunks kept, a new goal, ``init-soar``: the
+    kernel 27 decisions, ours 26) and reduced: no chunk and no new rule is needed, only
+    ``init-soar`` after two decisions (the first substate made). In the second run, when
+    ``fill`` is applied in the first look-ahead substate, the kernel creates
+    ``water-jug*propose*empty``'s operator after ``*propose*pour``'s (O9 empty, O8 pour in
+    a fresh run and in ours; O9 pour, O8 empty after init-soar); the numbering of the tied
+    operators then differs, ``indifferent-selection --first`` evaluates other copies, and
+    the decisions differ from decision 30 on (after one decision, ``init-soar`` changes
+    none: ``test_same_decisions_after_an_early_init_soar``).
+
+    Both propose rules join the new ``^contents`` WME from the (* ^contents *) alpha
+    memory, so the kernel's order of those joins changed. Our best reading is the Rete's
+    unlinking, undone in another order in the second run: init-soar empties every memory,
+    so joins are unlinked (from their alpha memory when their beta memory empties, from
+    their parent when their alpha memory does) and relinked (at the tail of the alpha
+    memory's list, the head of the parent's) as tokens and WMEs come back, while
+    ``KernelOrder.restart`` counts every join as made before the new working memory and
+    keeps the first run's order of joins (``firing_order.kernel_key``).
+    """
+    ours = _operators_after_init(_FIRST, 2, kernel=False)
+    theirs = _operators_after_init(_FIRST, 2, kernel=True)
+    assert ours[:20] == theirs[:20]  # to decision 6: the proposals of pour and empty
+    assert _decisions(ours) == _decisions(theirs)
+
+
+def test_same_decisions_after_an_early_init_soar() -> None:
+    """The control of ``test_firing_order_after_init_soar``: ``init-soar`` after one
+    decision leaves the second run as the kernel's."""
+    ours = _operators_after_init(_FIRST, 1, kernel=False)
+    theirs = _operators_after_init(_FIRST, 1, kernel=True)
+    assert _decisions(ours) == _decisions(theirs) and len(_decisions(ours)) > 100
+
+
+_FIRST = ["indifferent-selection --first", "srand 1"]
+
+
+def _decisions(lines: list[str]) -> list[str]:
+    return [line.strip() for line in lines if not line.startswith("+")]
