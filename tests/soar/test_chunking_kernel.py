@@ -242,13 +242,15 @@ def test_firing_order_after_init_soar() -> None:
     none: ``test_same_decisions_after_an_early_init_soar``).
 
     Both propose rules join the new ``^contents`` WME from the (* ^contents *) alpha
-    memory, so the kernel's order of those joins changed. Our best reading is the Rete's
-    unlinking, undone in another order in the second run: init-soar empties every memory,
-    so joins are unlinked (from their alpha memory when their beta memory empties, from
-    their parent when their alpha memory does) and relinked (at the tail of the alpha
-    memory's list, the head of the parent's) as tokens and WMEs come back, while
-    ``KernelOrder.restart`` counts every join as made before the new working memory and
-    keeps the first run's order of joins (``firing_order.kernel_key``).
+    memory, so the kernel's order of those joins changed. Our best reading (not measured
+    node by node) is the Rete's unlinking: init-soar empties every memory, and a join is
+    unlinked from its alpha memory if its beta memory empties first (relinked at the
+    tail of the alpha memory's list when a token comes back), from its parent if its
+    alpha memory empties first (keeping its place in the alpha memory's list), never both;
+    so the order init-soar removes the WMEs in, which depends on what the first run built,
+    decides which joins move to the tail in the second run. ``KernelOrder.restart`` counts
+    every join as made before the new working memory instead, keeping the first run's
+    order of joins (``firing_order.kernel_key``).
     """
     ours = _operators_after_init(_FIRST, 2, kernel=False)
     theirs = _operators_after_init(_FIRST, 2, kernel=True)
