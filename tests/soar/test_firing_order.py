@@ -353,3 +353,46 @@ def test_a_relinked_join_goes_before_its_linked_ancestor(tmp_path) -> None:
     ours = writes(_our_trace(RELINK_BEFORE_ANCESTOR, 10, 1))
     assert ours == ["p alone L2", "p alone R4", "p eaten R4"]
     assert ours == writes(_kernel_trace(RELINK_BEFORE_ANCESTOR, 10, tmp_path, 1))
+
+
+# Reduced from rules/blocks.soar (C3 scene 13/9 of tests/tasks/test_planning.py, issue 16):
+# go*a adds (S1 ^name sub) and (S1 ^target T) in one batch; need-top and need-y both start
+# with (state <s> ^name sub) and share its join, and need-y's -^aim x goes before its
+# ^target in the kernel's order, so need-y's negation hangs from that join and need-top's
+# ^target join from the beta memory below it. The kernel merges a memory with its only
+# join and splits them when a second join comes below it: a rule that adds one (covered,
+# loaded last) puts the memory at the head of the join's children, so need-top's match is
+# made first and need-y fires first.
+SHARED_NAME_BASE = """
+sp {init (state <s> ^superstate nil -^block) --> (<s> ^operator <o> + >) (<o> ^name init)}
+sp {init*a (state <s> ^operator.name init) --> (<s> ^block <t>) (<t> ^carries <c> ^yside <y>)}
+sp {go (state <s> ^block <t> -^target) --> (<s> ^operator <o> + >) (<o> ^name go)}
+sp {go*a (state <s> ^operator.name go ^block <t>) --> (<s> ^name sub ^target <t>)}
+"""
+NEED_TOP = ("sp {need-top (state <s> ^name sub ^target <t>) (<t> ^carries <c>)"
+            " --> (<s> ^needed <c>)}\n")
+NEED_Y = ("sp {need-y (state <s> ^name sub ^target <t> -^aim x) (<t> ^yside <c>)"
+          " --> (<s> ^need-y <c>)}\n")
+COVERED = ("sp {covered (state <s> ^name sub ^needed <n>) (<n> ^carries <c>)"
+           " --> (<s> ^covered <n>)}\n")
+SPLITS = {
+    # no second continuation below the ^name join's memory: need-y's match is made first
+    "no-split": (NEED_TOP + NEED_Y, ["need-top", "need-y"]),
+    # covered splits the memory after need-y's negation joined: the memory is newer
+    "split-last": (NEED_TOP + NEED_Y + COVERED, ["need-y", "need-top"]),
+    # the memory split (by need-top or covered) before need-y came: need-y is newer
+    "split-first": (COVERED + NEED_TOP + NEED_Y, ["need-top", "need-y"]),
+    "split-between": (NEED_TOP + COVERED + NEED_Y, ["need-top", "need-y"]),
+    # the second continuation is a join right above a p-node
+    "split-by-short-rule": (NEED_TOP + NEED_Y + "sp {covered (state <s> ^name sub ^needed <n>)"
+                            " --> (<s> ^covered <n>)}\n", ["need-y", "need-top"]),
+}
+
+
+@pytest.mark.parametrize("case", sorted(SPLITS))
+def test_a_memory_split_by_a_second_join_goes_to_the_head(case: str, tmp_path) -> None:
+    text, expected = SPLITS[case]
+    text = SHARED_NAME_BASE + text
+    ours = re.findall(r"Firing (need-\S+)", _our_trace(text, 4, 3))
+    assert ours == expected
+    assert ours == re.findall(r"Firing (need-\S+)", _kernel_trace(text, 4, tmp_path, 3))

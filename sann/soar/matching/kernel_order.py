@@ -5,7 +5,9 @@ making them (its match-set lists take the newest first).  As soar_sml 9.6 behave
 enters its alpha memories (* ^attr *) before (* ^attr value); an alpha memory right-activates
 its join nodes oldest first (a new join goes to the tail of the list); a join passes a token
 to its children newest first (a new child goes to the head), and all its positive
-continuations hang below one beta memory, made with the first of them.  The kernel's join
+continuations hang below one beta memory, which takes its place among the join's children
+when the second of them comes (the kernel merges a memory with its only join and splits
+them then, the new memory going to the head).  The kernel's join
 nodes are its own: the conditions in the kernel's order (reorder.py), shared by equal
 prefixes.  This model builds that tree of nodes (no memories, no tokens): a production's
 nodes are numbered when made, and a match's place (:class:`Place`) is the path from the
@@ -129,6 +131,7 @@ class KernelOrder:
         self._paths: dict[str, list[tuple[KernelNode, object, KernelNode]]] = {}
         self._places: dict[str, dict[int, Place]] = {}
         self._ordered: dict[str, list] = {}
+        self._joins: dict[str, tuple[list[tuple[int, int, int]], list]] = {}
 
     def ordered(self, name: str) -> list | None:
         """The production's conditions in the kernel's order (``reorder.KCond``)."""
@@ -162,6 +165,8 @@ class KernelOrder:
             positive = not kcond.negated and not kcond.is_ncc
             if positive and is_join:
                 parent = self._node(node, "memory", path, now)
+                if key not in parent.children and len(parent.children) == 1:
+                    self._split(parent)
             node = self._node(parent, key, path, now)
             if positive:
                 joins.append((kcond.index, position, len(path)))
@@ -172,29 +177,24 @@ class KernelOrder:
         pnode.users = 1
         path.append((node, ("p", production.name), pnode))
         self._paths[production.name] = path
-        below = [-node.serial for _, _, node in path]
-        conditions = production.conditions
-        places: dict[int, Place] = {}
-        for k, (index, position, length) in enumerate(joins):
-            if index not in places:
-                _, _, join = path[length - 1]
-                before = tuple(dict.fromkeys(written for written, _, _ in joins[:k]))
-                cond = conditions[index]
-                mask = ((2 if type(cond.attr_test) is Const else 0)  # type: ignore[union-attr]
-                        | (4 if type(cond.value_test) is Const else 0))  # type: ignore[union-attr]
-                twins = tuple(j for j, _, _ in joins if j != index
-                              and _same_alpha(cond, conditions[j]))  # type: ignore[arg-type]
-                steps: list[object] = []
-                start = length
-                for later, _, later_length in joins[k + 1:]:
-                    steps.append(tuple(below[start:later_length]))
-                    steps.append(later)
-                    start = later_length
-                steps.append(tuple(below[start:]))
-                places[index] = Place(mask, before, join.born, (join.serial, *below[length:]),
-                                      twins, position, pnode.born, tuple(steps))
+        self._joins[production.name] = (joins, production.conditions)
+        places = _places(path, joins, production.conditions)
         self._places[production.name] = places  # shared with the caller: see restart
         return places
+
+    def _split(self, memory: KernelNode) -> None:
+        """A second positive continuation comes below ``memory``: the kernel's Rete had it
+        merged with its one join (an MP node) and splits it, and the new memory node goes
+        to the head of its parent's children, newest. The places of the productions below
+        it are made again from the new serial number."""
+        self._serial += 1
+        memory.serial = self._serial
+        for name, path in self._paths.items():
+            if any(node is memory for _, _, node in path):
+                joins, conditions = self._joins[name]
+                places = self._places[name]  # shared with the caller: updated in place
+                places.clear()
+                places.update(_places(path, joins, conditions))
 
     def with_kernel_relations(self, production: Production) -> Production:
         """``production`` with its relational tests where the kernel's Rete runs them
@@ -216,7 +216,37 @@ class KernelOrder:
     def remove(self, name: str) -> None:
         self._places.pop(name, None)
         self._ordered.pop(name, None)
+        self._joins.pop(name, None)
         for parent, key, node in reversed(self._paths.pop(name, [])):
             node.users -= 1
             if node.users <= 0:
                 del parent.children[key]
+
+
+def _places(path: list[tuple[KernelNode, object, KernelNode]],
+            joins: list[tuple[int, int, int]], conditions: list) -> dict[int, Place]:
+    """The :class:`Place` of each written positive condition of a production whose nodes
+    are ``path`` (its p-node last); ``joins``: (written index, kernel position, path
+    length) per positive join, in the kernel's order."""
+    pnode = path[-1][2]
+    below = [-node.serial for _, _, node in path]
+    places: dict[int, Place] = {}
+    for k, (index, position, length) in enumerate(joins):
+        if index not in places:
+            _, _, join = path[length - 1]
+            before = tuple(dict.fromkeys(written for written, _, _ in joins[:k]))
+            cond = conditions[index]
+            mask = ((2 if type(cond.attr_test) is Const else 0)
+                    | (4 if type(cond.value_test) is Const else 0))
+            twins = tuple(j for j, _, _ in joins if j != index
+                          and _same_alpha(cond, conditions[j]))
+            steps: list[object] = []
+            start = length
+            for later, _, later_length in joins[k + 1:]:
+                steps.append(tuple(below[start:later_length]))
+                steps.append(later)
+                start = later_length
+            steps.append(tuple(below[start:]))
+            places[index] = Place(mask, before, join.born, (join.serial, *below[length:]),
+                                  twins, position, pnode.born, tuple(steps))
+    return places
