@@ -131,7 +131,7 @@ class KernelOrder:
         self._paths: dict[str, list[tuple[KernelNode, object, KernelNode]]] = {}
         self._places: dict[str, dict[int, Place]] = {}
         self._ordered: dict[str, list] = {}
-        self._joins: dict[str, tuple[list[tuple[int, int, int]], list]] = {}
+        self._joins: dict[str, tuple[list[tuple[int, int, int]], tuple]] = {}
 
     def ordered(self, name: str) -> list | None:
         """The production's conditions in the kernel's order (``reorder.KCond``)."""
@@ -224,7 +224,7 @@ class KernelOrder:
 
 
 def _places(path: list[tuple[KernelNode, object, KernelNode]],
-            joins: list[tuple[int, int, int]], conditions: list) -> dict[int, Place]:
+            joins: list[tuple[int, int, int]], conditions: tuple) -> dict[int, Place]:
     """The :class:`Place` of each written positive condition of a production whose nodes
     are ``path`` (its p-node last); ``joins``: (written index, kernel position, path
     length) per positive join, in the kernel's order."""
