@@ -139,18 +139,36 @@ def test_cycle_is_a_dead_end_and_only_its_victims_fail() -> None:
 
 @pytest.mark.parametrize("engine", ["sann", "soar_sml"])
 def test_a_cycle_over_the_target_ends_the_search_without_a_plan(engine: str) -> None:
-    """Runaway protection: the search digs through the free cups over a cycle, fails in every
-    branch and gives up; the agent halts within a bounded run, with no sequence."""
+    """Runaway protection: seven free cups over a two-cup cycle could be taken in 7! orders,
+    every one a dead end; a target whose needed cups hold a cycle gives up at once instead."""
     if engine == "soar_sml":
         _sml_or_skip()
-    # B and C lie over each other, both over A; D and E lie over B (a tie), F is free.
-    scene = _scene(6, [(1, 0), (2, 0), (1, 2), (2, 1), (3, 1), (4, 1)])
+    # B and C lie over each other, both over A; D..J all lie over B (they would tie).
+    pairs = [(1, 0), (2, 0), (1, 2), (2, 1)] + [(k, 1) for k in range(3, 10)]
+    scene = _scene(10, pairs)
     with CupPlanner(engine) as planner:
         plans, trace = planner.traced(scene)
     assert plans[0] == plans[1] == plans[2] == []
-    assert _texts(plans)["D"] == ["1:D"] and _texts(plans)["F"] == ["1:F"]
-    assert "(operator tie)" in trace and trace.count("(give-up)") == 3
-    assert "(finish)" in trace
+    assert all(_texts(plans)[CUP_NAMES[k]] == [f"1:{CUP_NAMES[k]}"] for k in range(3, 10))
+    assert "(operator tie)" not in trace and trace.count("(give-up)") == 3
+    decisions = [int(line.split(":")[0]) for line in trace.splitlines()
+                 if line.strip()[:1].isdigit()]
+    # per target: plan-target, its substate, one give-up or grasp; then finish
+    assert "(finish)" in trace and max(decisions) == 3 * 10 + 1
+
+
+@pytest.mark.parametrize("engine", ["sann", "soar_sml"])
+def test_free_cups_over_a_cycle_elsewhere_are_still_planned(engine: str) -> None:
+    """A cycle blocks only the targets that need a cup of it: E, over the cycle, and F, over
+    the same cup D as E, are planned (and tie on D); D itself is not."""
+    if engine == "soar_sml":
+        _sml_or_skip()
+    # A and B over each other, both over C; D over C too; E and F over D; G alone.
+    scene = _scene(7, [(0, 1), (1, 0), (0, 2), (1, 2), (3, 2), (4, 3), (5, 3), (4, 0)])
+    texts = _texts(plan_cups(scene, engine=engine))
+    assert texts["A"] == texts["B"] == texts["C"] == []
+    assert texts["D"] == ["3:EFD", "3:FED"]
+    assert texts["E"] == ["1:E"] and texts["F"] == ["1:F"] and texts["G"] == ["1:G"]
 
 
 def test_relations_from_true_poses_feed_the_plan() -> None:
