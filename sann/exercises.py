@@ -194,17 +194,17 @@ def _judge_monitor(exercise: Exercise, text: str) -> list[Result]:
     ]
 
 
-# ------------------------------------------------------------ 4. cups without forks
+# ------------------------------------------------------------ 4. cups: one order per target
 
 
-def small_pile(cap: int = 8) -> list:
+def small_pile() -> list:
     """The input-link of the chapter's hand-made pile (A and B on C, D on A, so D lies over C
     too; upright cups 100 mm apart in height), every cup a target, as the cups driver
     (sann.tasks.cups) writes it; tests/book/test_exercises.py checks that it still does."""
     positions = [(0.0, 0.0, 100.0), (60.0, 0.0, 100.0), (30.0, 0.0, 0.0), (0.0, 0.0, 200.0)]
     over = {0: [2], 1: [2], 3: [0, 2]}
     on = {0: [2], 1: [2], 3: [0]}
-    tree: list = [["cap", "i", str(cap)]] + [["target", "i", str(i)] for i in range(4)]
+    tree: list = [["target", "i", str(i)] for i in range(4)]
     for i, (x, y, z) in enumerate(positions):
         cup = [["index", "i", str(i)], ["name", "s", "ABCD"[i]], ["score", "f", "1.0"],
                ["x", "f", repr(x)], ["y", "f", repr(y)], ["z", "f", repr(z)],
@@ -216,32 +216,49 @@ def small_pile(cap: int = 8) -> list:
 
 
 def cup_sequences(agent: Agent) -> dict[str, list[str]]:
-    """Per target cup's name, the orders the agent wrote on its output-link, sorted."""
+    """Per target cup's name, the orders the agent wrote on its output-link (the symbols
+    target:T_o:order of rules/cups.soar), sorted."""
     found: dict[str, list[str]] = {name: [] for name in "ABCD"}
     for attr, sequence in agent.output_link.children():
         if attr == "sequence":
-            fields = dict(sequence.children())
-            found["ABCD"[int(fields["target"])]].append(str(fields["order"]))
+            target, _, order = str(sequence).split(":")
+            found["ABCD"[int(target)]].append(order)
     return {name: sorted(orders) for name, orders in found.items()}
 
 
-def _judge_no_fork(exercise: Exercise, text: str) -> list[Result]:
+def _tie_impasses(agent: Agent, limit: int) -> int:
+    """Run ``agent`` (at most ``limit`` decisions): how many decisions saw a new tie impasse."""
+    seen: set[object] = set()
+    for _ in range(limit):
+        if agent.halted:
+            break
+        agent.step()
+        seen |= {w.id for w in agent.wmes() if w.attr == "impasse" and str(w.value) == "tie"}
+    return len(seen)
+
+
+def _judge_one_order(exercise: Exercise, text: str) -> list[Result]:
+    added, _ = _adds_a_rule(exercise, text)
     agent = exercise.agent(text)
-    agent.run(exercise.decisions)
+    ties = _tie_impasses(agent, exercise.decisions)
     edited = cup_sequences(agent)
-    reference = Agent(out=io.StringIO())
-    reference.load((RULES / "cups.soar").read_text(encoding="utf-8"), file="rules/cups.soar")
-    put_input(reference, small_pile(cap=1))
+    reference = exercise.agent("")
     reference.run(exercise.decisions)
-    capped = cup_sequences(reference)
+    searched = cup_sequences(reference)
+    lowest = {name: orders[:1] for name, orders in searched.items()}
     counts = {name: len(orders) for name, orders in edited.items()}
     return [
+        added,
         Result("the planner still halts", agent.halted,
                f"{agent.stats['decisions']} decisions" + ("" if agent.halted else ", no halt")),
+        Result("no tie impasse is left to search", agent.halted and ties == 0,
+               f"{ties} tie impasses"),
         Result("every cup gets exactly one sequence", all(n == 1 for n in counts.values()),
                ", ".join(f"{name}: {n}" for name, n in counts.items())),
-        Result("the plans are those of the original rules with cap=1", edited == capped,
-               f"C: {', '.join(edited['C']) or 'none'} (cap=1: {', '.join(capped['C'])})"),
+        Result("each is the shipped search's plan that takes the lowest free cup first",
+               edited == lowest,
+               f"C: {', '.join(edited['C']) or 'none'} (the search found "
+               f"{', '.join(searched['C'])})"),
     ]
 
 
@@ -264,8 +281,9 @@ EXERCISES: dict[str, Exercise] = {
             "# writes each selected operator's name and the decision count, (dc).\n",
             10_000, inputs=(("disks", "i", "4"),), judge=_judge_monitor),
         Exercise(
-            "cups-no-fork", "Cups: let the planner keep a single order", (),
-            (RULES / "cups.soar").read_text(encoding="utf-8"),
-            10_000, inputs=tuple(small_pile()), judge=_judge_no_fork),
+            "cups-one-order", "Cups: let the planner keep a single order", ("cups.soar",),
+            "# rules/cups.soar is loaded, with the four-cup pile on the input-link. Add a\n"
+            "# rule that leaves no tie among the grasps: one order per target.\n",
+            10_000, inputs=tuple(small_pile()), judge=_judge_one_order),
     )
 }

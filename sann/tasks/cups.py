@@ -33,6 +33,7 @@ import ast
 import hashlib
 import json
 import os
+import re
 import time
 from collections.abc import Iterable, Sequence
 from dataclasses import asdict, dataclass, field
@@ -42,13 +43,12 @@ from typing import NamedTuple
 import numpy as np
 
 from sann import RULES
-from sann.tasks.backends import InputItem, SannBackend, SmlBackend, sequence_fields
+from sann.tasks.backends import InputItem, OutputValue, SannBackend, SmlBackend
 from sann.vision.camera import Camera, default_camera, make_pose
 from sann.vision.detect import MAX_DETECTIONS, DetectConfig, Detection
 
 ENGINES = ("sann", "soar_sml")
 DEFAULT_RULES = RULES / "cups.soar"
-DEFAULT_CAP = 8
 MAX_CUPS = MAX_DETECTIONS
 CUP_NAMES = "ABCDEFGHIJ"
 POSE_COLUMNS = ("x", "y", "z", "r11", "r12", "r13", "r21", "r22", "r23", "r31", "r32", "r33",
@@ -143,9 +143,29 @@ class CupSequence(NamedTuple):
     order: str
 
 
-def _cup_items(scene: CupScene, cap: int, targets: Sequence[int]) -> list[InputItem]:
+def parse_sequence(text: str) -> CupSequence:
+    """A plan as the rules write it on the output-link, ``target:T_o:order``."""
+    try:
+        target, t_o, order = text.split(":")
+        return CupSequence(int(target), int(t_o), order)
+    except ValueError:
+        raise ValueError(f"not a plan of rules/cups.soar (target:T_o:order): {text!r}") from None
+
+
+def _plans(found: list[OutputValue]) -> list[CupSequence]:
+    """The plans of the output-link's ``^sequence`` values (symbols, :func:`parse_sequence`)."""
+    plans = []
+    for value in found:
+        if not isinstance(value, str):
+            raise RuntimeError(f"the rules wrote ^sequence {value!r}: a plan symbol "
+                               "target:T_o:order was expected")
+        plans.append(parse_sequence(value))
+    return plans
+
+
+def _cup_items(scene: CupScene, targets: Sequence[int]) -> list[InputItem]:
     """The input-link of one frame (see the header of rules/cups.soar)."""
-    items: list[InputItem] = [("cap", cap), *(("target", int(t)) for t in targets)]
+    items: list[InputItem] = [("target", int(t)) for t in targets]
     for i in range(scene.n):
         p, a = scene.positions[i], scene.axes[i]
         items.append(("cup", [
@@ -163,18 +183,21 @@ class CupPlanner:
 
     ``plan(scene, targets)`` returns ``{target row: [CupSequence, ...]}`` with every target
     present (an empty list when no plan reached it), sequences sorted by (T_o, order) so that
-    both engines give equal results.
+    both engines give equal results. The sequences are every distinct plan Soar's search
+    reached (see the header of rules/cups.soar): there is no budget. ``seed`` seeds the
+    agent's generator (``srand``, before every run), which picks among grasps the search
+    found equally good; the plans do not depend on it, the trace does.
     """
 
     def __init__(self, engine: str = "sann", rules: str | os.PathLike[str] = DEFAULT_RULES,
-                 cap: int = DEFAULT_CAP) -> None:
+                 seed: int = 0) -> None:
         if engine not in ENGINES:
             raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
-        if isinstance(cap, bool) or not isinstance(cap, int) or cap < 1:
-            raise ValueError(f"cap must be an integer >= 1, got {cap!r}")
+        if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+            raise ValueError(f"seed must be an integer >= 0, got {seed!r}")
         if not Path(rules).is_file():
             raise ValueError(f"rules file not found: {rules}")
-        self.engine, self.rules, self.cap = engine, Path(rules), cap
+        self.engine, self.rules, self.seed = engine, Path(rules), seed
         self._backend = (SannBackend(self.rules) if engine == "sann"
                          else SmlBackend(self.rules, "cups"))
 
@@ -184,13 +207,46 @@ class CupPlanner:
         bad = sorted({t for t in wanted if not 0 <= t < scene.n})
         if bad:
             raise ValueError(f"targets {bad} are not rows of the scene (0..{scene.n - 1})")
-        items = _cup_items(scene, self.cap, sorted(set(wanted)))
-        found = ([CupSequence(int(s["target"]), int(s["t-o"]), s["order"])
-                  for s in map(sequence_fields, self._backend.run(items))] if wanted else [])
+        items = _cup_items(scene, sorted(set(wanted)))
+        found = _plans(self._backend.run(items, seed=self.seed)) if wanted else []
         result: dict[int, list[CupSequence]] = {t: [] for t in wanted}
         for seq in found:
             result[seq.target].append(seq)
         return {t: sorted(v, key=lambda s: (s.t_o, s.order)) for t, v in result.items()}
+
+    def traced(self, scene: CupScene, targets: Iterable[int] | None = None, level: int = 1
+               ) -> tuple[dict[int, list[CupSequence]], str]:
+        """Plan one scene as :meth:`plan` does, with the engine's trace at watch ``level``
+        (1: decisions -- operators, impasses, substates): ``(plans, trace text)``."""
+        if isinstance(self._backend, SannBackend):
+            agent = self.agent
+            agent.trace(level)
+            try:
+                plans = self.plan(scene, targets)
+            finally:
+                agent.trace(0)
+            return plans, self._backend.transcript.getvalue()
+        import soar_sml
+
+        log: list[str] = []
+        kernel_agent = self._backend.agent
+        handler = kernel_agent.RegisterForPrintEvent(
+            soar_sml.smlEVENT_PRINT, lambda _mid, _ud, _ag, msg: log.append(msg), None)
+        kernel_agent.ExecuteCommandLine(f"watch {level}")
+        try:
+            plans = self.plan(scene, targets)
+        finally:
+            kernel_agent.ExecuteCommandLine("watch 0")
+            kernel_agent.UnregisterForPrintEvent(handler)
+        # the init-soar that follows each run traces the new top state: not part of the plan
+        return plans, re.sub(r"\n +0: ==>S: S1 ?", "", "".join(log))
+
+    @property
+    def agent(self):  # -> sann.soar.Agent (imported lazily, as the backend does)
+        """Our engine's agent, its working memory as the last run left it."""
+        if not isinstance(self._backend, SannBackend) or self._backend.agent is None:
+            raise ValueError("only a planner of engine 'sann' that is not closed has an agent")
+        return self._backend.agent
 
     def close(self) -> None:
         self._backend.close()
@@ -203,10 +259,10 @@ class CupPlanner:
 
 
 def plan_cups(scene: CupScene, targets: Iterable[int] | None = None, engine: str = "sann",
-              rules: str | os.PathLike[str] = DEFAULT_RULES, cap: int = DEFAULT_CAP,
+              rules: str | os.PathLike[str] = DEFAULT_RULES, seed: int = 0,
               ) -> dict[int, list[CupSequence]]:
     """Plan one scene: ``{target row: sequences}`` (default: every cup a target)."""
-    with CupPlanner(engine, rules, cap) as planner:
+    with CupPlanner(engine, rules, seed) as planner:
         return planner.plan(scene, targets)
 
 
@@ -471,14 +527,18 @@ def make_dataset(
     params: CupsDataParams | None = None,
     engine: str = "sann",
     rules: str | os.PathLike[str] | None = None,
-    cap: int = DEFAULT_CAP,
+    cap: int | None = None,
     progress: bool = False,
     use_cache: bool = True,
 ) -> CupsDataset:
     """Build (or load from the cache) the cup dataset; the test frames are also scored with
     plain LineMod, for the comparison. The cache key covers every argument except ``engine``
-    (both engines give identical plans: tests/tasks/test_cups.py checks it), ``progress`` and
-    ``use_cache``."""
+    (both engines give identical plans: tests/tasks/test_cups.py checks it), ``progress``,
+    ``use_cache`` and ``cap``.
+
+    ``cap`` was the budgeted planner's most sequences per target. The rules now keep every
+    plan their search reaches, so it no longer changes the data; it is still accepted (and
+    checked) because callers written for that planner pass it (``CupsExperiment.cap``)."""
     n_train_piles = _check_count(n_train_piles, "n_train_piles")
     n_test_piles = _check_count(n_test_piles, "n_test_piles")
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
@@ -486,14 +546,16 @@ def make_dataset(
     params = params or CupsDataParams()
     if not isinstance(params, CupsDataParams):
         raise ValueError(f"params must be a CupsDataParams, got {type(params).__name__}")
+    if cap is not None and (isinstance(cap, bool) or not isinstance(cap, int) or cap < 1):
+        raise ValueError(f"cap must be None or an integer >= 1, got {cap!r}")
     rules = Path(rules or DEFAULT_RULES)
-    with CupPlanner(engine, rules, cap) as planner:
+    with CupPlanner(engine, rules) as planner:
         splits = {}
         for split, n_piles, methods in (("train", n_train_piles, ("patch",)),
                                         ("test", n_test_piles, METHODS)):
             splits[split] = _cached_split(split, n_piles, int(seed), params, planner, methods,
                                           progress, use_cache)
-    return _assemble(splits, n_train_piles, n_test_piles, int(seed), params, rules, cap)
+    return _assemble(splits, n_train_piles, n_test_piles, int(seed), params, rules)
 
 
 def _cached_split(split: str, n_piles: int, seed: int, params: CupsDataParams,
@@ -504,7 +566,7 @@ def _cached_split(split: str, n_piles: int, seed: int, params: CupsDataParams,
     description = {
         "split": split, "piles": n_piles, "seed": seed, "params": asdict(params),
         "methods": list(methods), "rules_code_sha256": cache.soar_code_sha256(planner.rules),
-        "cap": planner.cap, "vision_sha256": vision_sha256(), "version": DATASET_VERSION,
+        "vision_sha256": vision_sha256(), "version": DATASET_VERSION,
     }
     return cache.get_or_build(
         f"cups-{split}", description,
@@ -580,7 +642,7 @@ def _add_samples(rows: dict[str, list], obs: PileObservation, index: int) -> Non
 
 
 def _assemble(splits: dict, n_train: int, n_test: int, seed: int, params: CupsDataParams,
-              rules: Path, cap: int) -> CupsDataset:
+              rules: Path) -> CupsDataset:
     from sann import cache
 
     fields: dict = {}
@@ -603,7 +665,7 @@ def _assemble(splits: dict, n_train: int, n_test: int, seed: int, params: CupsDa
         "train_positive": float(fields["y_train"].mean()) if len(fields["y_train"]) else 0.0,
         "test_positive": float(fields["y_test"].mean()) if len(fields["y_test"]) else 0.0,
         "params": asdict(params), "rules": str(rules), "rules_sha256": cache.file_sha256(rules),
-        "cap": cap, "version": DATASET_VERSION, "build_seconds": seconds, "cache_hit": hits,
+        "version": DATASET_VERSION, "build_seconds": seconds, "cache_hit": hits,
     }
     return CupsDataset(detection_train=detection["train"], detection_test=detection["test"],
                        params=params, meta=meta, **fields)

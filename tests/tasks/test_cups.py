@@ -1,7 +1,9 @@
 """rules/cups.soar and the cup samples: known plans, ours == the real kernel == a reference of
-the documented enumeration, labels from the true poses, samples built from estimated poses."""
+the documented search, labels from the true poses, samples built from estimated poses."""
 
 from __future__ import annotations
+
+import re
 
 import numpy as np
 import pytest
@@ -18,6 +20,7 @@ from sann.tasks.cups import (
     label_detections,
     make_dataset,
     observe_pile,
+    parse_sequence,
     pile_spec,
     plan_cups,
 )
@@ -44,36 +47,38 @@ def _texts(plans: dict) -> dict[str, list[str]]:
     return {CUP_NAMES[t]: [f"{s.t_o}:{s.order}" for s in seqs] for t, seqs in plans.items()}
 
 
-def _reference(scene: CupScene, target: int, cap: int) -> list[str]:
-    """The enumeration the rule file's header documents, in plain Python."""
+def _reference(scene: CupScene, target: int) -> list[str]:
+    """The plans of the search the rule file's header documents, in plain Python: a depth-first
+    search through every branch of every tie (free cups over the same cup as the first free
+    cup), the first free cup elsewhere."""
     cover = scene.over | scene.on
-    done: list[str] = []
-    plans = [(frozenset(), "", cap)]
-    while plans:
-        advanced = []
-        for removed, path, budget in plans:
-            needed, covered, stack = {target}, set(), [target]
-            while stack:
-                x = stack.pop()
-                for a in np.flatnonzero(cover[:, x]):
-                    if a in removed:
-                        continue
-                    covered.add(x)
-                    if a not in needed:
-                        needed.add(int(a))
-                        stack.append(int(a))
-            if target not in covered:
-                done.append(f"{len(path) + 1}:{path}{CUP_NAMES[target]}")
-                continue
-            free = sorted(x for x in needed if x != target and x not in covered)
-            if not free:
-                continue  # dead end
-            if len(free) > 1 and budget > 1:
-                advanced.append((removed | {free[1]}, path + CUP_NAMES[free[1]], budget // 2))
-                budget -= budget // 2
-            advanced.append((removed | {free[0]}, path + CUP_NAMES[free[0]], budget))
-        plans = advanced
-    return sorted(done, key=lambda s: (int(s.split(":")[0]), s))
+    found: set[str] = set()
+
+    def search(removed: frozenset, path: str) -> None:
+        needed, covered, stack = {target}, set(), [target]
+        while stack:
+            x = stack.pop()
+            for a in map(int, np.flatnonzero(cover[:, x])):
+                if a in removed:
+                    continue
+                covered.add(x)
+                if a not in needed:
+                    needed.add(a)
+                    stack.append(a)
+        if target not in covered:
+            found.add(f"{len(path) + 1}:{path}{CUP_NAMES[target]}")
+            return
+        free = sorted(x for x in needed if x != target and x not in covered)
+        if not free:
+            return  # a dead end: a cycle of the relations
+        first = free[0]
+        below = {x for x in needed if cover[first, x]}
+        for c in free:
+            if c == first or any(cover[c, x] for x in below):
+                search(removed | {c}, path + CUP_NAMES[c])
+
+    search(frozenset(), "")
+    return sorted(found, key=lambda s: (int(s.split(":")[0]), s))
 
 
 def _sml_or_skip() -> None:
@@ -87,15 +92,40 @@ def _sml_or_skip() -> None:
 def test_plans_hand_built_pile(engine: str) -> None:
     if engine == "soar_sml":
         _sml_or_skip()
-    # D rests on B, B lies over A, C lies over A; E stands alone.
+    # D rests on B, B lies over A, C lies over A; E stands alone. C and D lie over different
+    # cups: their order is no choice, C (the lower index) goes first.
     scene = _scene(5, [(1, 0), (2, 0)], on_pairs=((3, 1),))
     assert _texts(plan_cups(scene, engine=engine)) == {
-        "A": ["4:CDBA", "4:DBCA", "4:DCBA"],  # every order in which D goes before B
+        "A": ["4:CDBA"],
         "B": ["2:DB"],
         "C": ["1:C"],
         "D": ["1:D"],
         "E": ["1:E"],
     }
+
+
+@pytest.mark.parametrize("engine", ["sann", "soar_sml"])
+def test_cups_over_the_same_cup_tie_and_every_order_is_found(engine: str) -> None:
+    if engine == "soar_sml":
+        _sml_or_skip()
+    # B, C and D lie over A: which comes off A first is a real choice, and so on below.
+    three = _texts(plan_cups(_scene(4, [(1, 0), (2, 0), (3, 0)]), targets=[0], engine=engine))
+    assert three["A"] == ["4:BCDA", "4:BDCA", "4:CBDA", "4:CDBA", "4:DBCA", "4:DCBA"]
+    # B and D over A, C on B: C and D lie over different cups, C goes first; then B and D
+    # are both free on A, and which comes off first is a real choice.
+    stack = _scene(4, [(1, 0), (3, 0)], on_pairs=((2, 1),))
+    assert _texts(plan_cups(stack, targets=[0], engine=engine))["A"] == ["4:CBDA", "4:CDBA"]
+    # two stacks over A (C on B, E on D): B and D are never free together, so no order is a
+    # choice: one plan, the lower index first.
+    stacks = _scene(5, [(1, 0), (3, 0)], on_pairs=((2, 1), (4, 3)))
+    assert _texts(plan_cups(stacks, targets=[0], engine=engine))["A"] == ["5:CBEDA"]
+
+
+def test_the_fusion_sum_counts_the_orders_found() -> None:
+    plans = plan_cups(_scene(5, [(1, 0), (2, 0), (3, 0), (4, 0)]), targets=[0])[0]
+    assert len(plans) == 24 and {s.t_o for s in plans} == {5}
+    assert len({s.order for s in plans}) == 24
+    assert logical_item(s.t_o for s in plans) == pytest.approx(24 * 0.5**4)
 
 
 def test_cycle_is_a_dead_end_and_only_its_victims_fail() -> None:
@@ -107,17 +137,38 @@ def test_cycle_is_a_dead_end_and_only_its_victims_fail() -> None:
     assert _texts(plans)["D"] == ["1:D"] and _texts(plans)["E"] == ["1:E"]
 
 
-def test_cap_and_fork_budget() -> None:
-    # four free cups over A: 24 orders, the binary splitting keeps cap of them
-    scene = _scene(5, [(1, 0), (2, 0), (3, 0), (4, 0)])
-    full = _texts(plan_cups(scene, targets=[0]))["A"]
-    assert full == ["5:BCDEA", "5:BCEDA", "5:BDCEA", "5:BDECA",
-                    "5:CBDEA", "5:CBEDA", "5:CDBEA", "5:CDEBA"]
-    for cap in (1, 2, 3, 5):
-        seqs = plan_cups(scene, targets=[0], cap=cap)[0]
-        assert len(seqs) == cap
-        assert [f"{s.t_o}:{s.order}" for s in seqs] == _reference(scene, 0, cap)
-    assert logical_item(s.t_o for s in plan_cups(scene, targets=[0])[0]) == 8 * 0.5**4
+@pytest.mark.parametrize("engine", ["sann", "soar_sml"])
+def test_a_cycle_over_the_target_ends_the_search_without_a_plan(engine: str) -> None:
+    """Runaway protection: seven free cups over a two-cup cycle could be taken in 7! orders,
+    every one a dead end; a target whose needed cups hold a cycle gives up at once instead."""
+    if engine == "soar_sml":
+        _sml_or_skip()
+    # B and C lie over each other, both over A; D..J all lie over B (they would tie).
+    pairs = [(1, 0), (2, 0), (1, 2), (2, 1)] + [(k, 1) for k in range(3, 10)]
+    scene = _scene(10, pairs)
+    with CupPlanner(engine) as planner:
+        plans, trace = planner.traced(scene)
+    assert plans[0] == plans[1] == plans[2] == []
+    assert all(_texts(plans)[CUP_NAMES[k]] == [f"1:{CUP_NAMES[k]}"] for k in range(3, 10))
+    assert "(operator tie)" not in trace and trace.count("(give-up)") == 3
+    decisions = [int(line.split(":")[0]) for line in trace.splitlines()
+                 if line.strip()[:1].isdigit()]
+    # per target: plan-target, its substate, one give-up or grasp; then finish
+    assert "(finish)" in trace and max(decisions) == 3 * 10 + 1
+
+
+@pytest.mark.parametrize("engine", ["sann", "soar_sml"])
+def test_free_cups_over_a_cycle_elsewhere_are_still_planned(engine: str) -> None:
+    """A cycle blocks only the targets that need a cup of it: E, over the cycle, and F, over
+    the same cup D as E, are planned (and tie on D); D itself is not."""
+    if engine == "soar_sml":
+        _sml_or_skip()
+    # A and B over each other, both over C; D over C too; E and F over D; G alone.
+    scene = _scene(7, [(0, 1), (1, 0), (0, 2), (1, 2), (3, 2), (4, 3), (5, 3), (4, 0)])
+    texts = _texts(plan_cups(scene, engine=engine))
+    assert texts["A"] == texts["B"] == texts["C"] == []
+    assert texts["D"] == ["3:EFD", "3:FED"]
+    assert texts["E"] == ["1:E"] and texts["F"] == ["1:F"] and texts["G"] == ["1:G"]
 
 
 def test_relations_from_true_poses_feed_the_plan() -> None:
@@ -136,8 +187,10 @@ def test_planner_rejects_bad_input(tmp_path) -> None:
         plan_cups(scene, targets=[2])
     with pytest.raises(ValueError, match="engine"):
         CupPlanner(engine="clips")
-    with pytest.raises(ValueError, match="cap"):
-        CupPlanner(cap=0)
+    with pytest.raises(ValueError, match="seed"):
+        CupPlanner(seed=-1)
+    with pytest.raises(ValueError, match="target:T_o:order"):
+        parse_sequence("0:DA")
     with pytest.raises(ValueError, match="not found"):
         CupPlanner(rules=tmp_path / "missing.soar")
     with pytest.raises(ValueError, match="shape"):
@@ -188,18 +241,53 @@ def _random_relation_scenes(n: int = 20) -> list[CupScene]:
 
 
 def test_rules_match_the_kernel_and_the_reference_on_estimated_poses() -> None:
+    """Many estimated pose sets and arbitrary relations: ours == the kernel == the search the
+    header documents, with ties searched on a good share of the targets."""
     _sml_or_skip()
-    scenes = _estimated_scenes() + _random_relation_scenes()
-    assert len(scenes) >= 70
-    covered = 0
+    scenes = _estimated_scenes(8) + _random_relation_scenes(40)
+    assert len(scenes) >= 100
+    covered = tied = 0
     with CupPlanner("sann") as ours, CupPlanner("soar_sml") as kernel:
-        for scene in scenes:
+        for k, scene in enumerate(scenes):
             mine, theirs = ours.plan(scene), kernel.plan(scene)
-            assert mine == theirs
+            assert mine == theirs, k
             for t in range(scene.n):
-                assert [f"{s.t_o}:{s.order}" for s in mine[t]] == _reference(scene, t, 8)
+                assert [f"{s.t_o}:{s.order}" for s in mine[t]] == _reference(scene, t), (k, t)
             covered += sum(1 for seqs in mine.values() if seqs and seqs[0].t_o > 1)
-    assert covered > 50  # plenty of targets with cups over them
+            tied += sum(1 for seqs in mine.values() if len(seqs) > 1)
+    assert covered > 80 and tied > 15  # plenty of targets with cups over them, and of ties
+
+
+def test_a_trace_of_a_pile_with_cups_over_the_target_has_ties_and_substates() -> None:
+    """The watch-1 trace of a generated pile whose target has >= 2 cups over it: proposals,
+    an operator no-change substate, a tie impasse and its evaluations, in both engines."""
+    _sml_or_skip()
+    scene, target = next((s, t) for s in _estimated_scenes() for t in range(s.n)
+                         if s.over[:, t].sum() >= 2 and len(_reference(s, t)) > 1)
+    with CupPlanner("sann") as ours, CupPlanner("soar_sml") as kernel:
+        ours_plans, ours_trace = ours.traced(scene, [target])
+        kernel_plans, kernel_trace = kernel.traced(scene, [target])
+    assert ours_plans == kernel_plans and len(ours_plans[target]) > 1
+    for trace in (ours_trace, kernel_trace):
+        for shown in ("O: O1 (plan-target)", "(operator no-change)", "(operator tie)",
+                      "(evaluate-operator)", "(grasp)", "(finish)"):
+            assert shown in trace
+    assert _shape(ours_trace) == _shape(kernel_trace)
+
+
+def _shape(trace: str) -> str:
+    """A watch-1 trace without the numbers of its identifiers."""
+    return re.sub(r"\b([OSC])\d+\b", r"\1", trace)
+
+
+def test_the_seed_changes_the_picks_not_the_plans() -> None:
+    scene = _scene(5, [(1, 0), (2, 0), (3, 0)], on_pairs=((4, 1),))
+    runs = {}
+    for seed in (0, 0, 1, 7):
+        with CupPlanner(seed=seed) as planner:
+            runs.setdefault(seed, []).append(planner.traced(scene))
+    assert runs[0][0] == runs[0][1]
+    assert all(run[0][0] == runs[0][0][0] for run in (runs[1], runs[7]))
 
 
 # --------------------------------------------------------------------------- labels
